@@ -1,0 +1,6 @@
+//! One module per subcommand. Each defines `Args` (its flags) and `execute(Args)`.
+
+pub mod check;
+pub mod radiosity;
+pub mod run;
+pub mod test;

@@ -1,0 +1,2 @@
+//! Radiosity kernels: scene loading, meshing, octree ray casting, form factors, progressive
+//! refinement and the sequential reference solver.
