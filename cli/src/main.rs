@@ -4,6 +4,7 @@
 //! `commands/`, which owns its flags (`Args`) and its behaviour (`execute`).
 
 mod commands;
+mod frontend;
 
 use std::process::ExitCode;
 
