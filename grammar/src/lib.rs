@@ -2,3 +2,7 @@
 //!
 //! Pipeline: `preprocess` → `lexer` → `layout` → `parser` → [`ast`]. Nothing here touches the file
 //! system: included files are supplied through a loader trait implemented by the caller.
+
+#![deny(missing_docs)]
+
+pub mod ast;
