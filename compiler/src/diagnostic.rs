@@ -1,0 +1,330 @@
+//! The checker's diagnostics: errors are data.
+//!
+//! A [`Diagnostic`] is a [`DiagnosticKind`] (what went wrong, with the names and types involved)
+//! plus the span of the offending text and, sometimes, a second related span. Its message, label
+//! and help are derived from the kind, so that tests can assert on kinds and users read concrete
+//! messages in occam's terms. Spans are byte offsets into the preprocessed program text; the CLI
+//! maps them back to files and lines.
+
+use miette::{LabeledSpan, SourceSpan};
+use occ_grammar::ast::Span;
+
+/// How serious a diagnostic is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Severity {
+    /// The program is rejected.
+    Error,
+    /// The program is accepted but something deserves attention.
+    Warning,
+}
+
+/// What went wrong.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum DiagnosticKind {
+    /// Occurs when a name is used that is not in scope. Example: `x := 1` with no `INT x:`.
+    Undeclared {
+        /// The name.
+        name: String,
+    },
+    /// Occurs when a name is declared twice in one parameter list or record. Example: `PROC p (INT a, a)`.
+    Duplicate {
+        /// The name.
+        name: String,
+    },
+    /// Occurs when a name denotes the wrong kind of thing. Example: `INT x:` then `x (1)` as a call.
+    WrongKind {
+        /// The name.
+        name: String,
+        /// What the context wanted ("a PROC", "a channel").
+        expected: &'static str,
+        /// What the name is ("a variable").
+        found: &'static str,
+    },
+    /// Occurs when a value's type is not the type its context needs. Example: `INT x:` then `x := TRUE`.
+    TypeMismatch {
+        /// The type the context needs.
+        expected: String,
+        /// The type found.
+        found: String,
+    },
+    /// Occurs when an operator does not apply to its operand type. Example: `TRUE + FALSE`.
+    BadOperand {
+        /// The operator as written.
+        op: &'static str,
+        /// The operand type.
+        ty: String,
+    },
+    /// Occurs when different dyadic operators are mixed without parentheses. Example: `a + b * c`.
+    NeedsParentheses,
+    /// Occurs when a constant expression is an error in occam (overflow, division by zero, shift
+    /// count, range). Example: `VAL INT16 x IS 32767(INT16) + 1(INT16):`.
+    ConstantError {
+        /// What happened ("overflow in INT16 expression").
+        what: String,
+    },
+    /// Occurs when a constant is required and the expression is not one. Example: `[n]INT a:` with a variable `n`.
+    NotConstant {
+        /// Where a constant was needed ("array size", "CASE option").
+        context: &'static str,
+    },
+    /// Occurs when something is assigned or input to that cannot change. Example: `VAL INT x IS 1:` then `x := 2`.
+    NotAssignable {
+        /// The name.
+        name: String,
+    },
+    /// Occurs when a call has the wrong number of actual parameters. Example: `p (1, 2)` for `PROC p (INT a)`.
+    ArgumentCount {
+        /// The PROC or FUNCTION.
+        name: String,
+        /// Formal parameters.
+        expected: usize,
+        /// Actual parameters.
+        found: usize,
+    },
+    /// Occurs when the number of values differs from the number of targets. Example: `a, b := 1`.
+    ValueCount {
+        /// Targets or results expected.
+        expected: usize,
+        /// Values given.
+        found: usize,
+    },
+    /// Occurs when a communication does not match the channel's protocol. Example: `c ! 1; 2` on a `CHAN OF INT`.
+    Protocol {
+        /// What is wrong, concretely.
+        what: String,
+    },
+    /// Occurs when a channel is used against its direction specifier. Example: `c ! 1` for a parameter `CHAN INT c?`.
+    Direction {
+        /// The channel.
+        name: String,
+        /// "input" or "output": what was attempted.
+        used_for: &'static str,
+    },
+    /// Occurs when a PROC or FUNCTION calls itself (occam has no recursion). Example: `PROC p () p () :`.
+    Recursion {
+        /// The PROC or FUNCTION.
+        name: String,
+    },
+    /// Occurs when a variable is assigned in one branch of a PAR and used in another. Example:
+    /// `PAR` / `x := 1` / `y := x`.
+    ParUsage {
+        /// The variable.
+        name: String,
+    },
+    /// Occurs when a channel is used for input (or output) in more than one branch of a PAR.
+    /// Example: `PAR` / `c ? x` / `c ? y`.
+    ParChannel {
+        /// The channel.
+        name: String,
+        /// "input" or "output".
+        used_for: &'static str,
+    },
+    /// Occurs when an abbreviated variable is used while its abbreviation is in scope, or the same
+    /// variable is passed twice by reference. Example: `INT y IS x:` then `x := 1`.
+    Alias {
+        /// The variable.
+        name: String,
+    },
+    /// Occurs when RETYPES sizes differ where both are known. Example: `VAL INT x RETYPES 'a':`.
+    RetypeSize {
+        /// Bytes of the new type.
+        to: u32,
+        /// Bytes of the value.
+        from: u32,
+    },
+    /// Occurs when a construct is valid occam that this checker does not handle. Example: `PLACE x AT 0:`.
+    Unsupported {
+        /// What it is.
+        what: &'static str,
+    },
+    /// Occurs when a record has no field of that name. Example: `p[zz]` for a `RECORD` without `zz`.
+    NoSuchField {
+        /// The field.
+        field: String,
+        /// The record type.
+        record: String,
+    },
+    /// Occurs when a protocol has no tag of that name. Example: `c ! nosuch` on a tagged protocol.
+    NoSuchTag {
+        /// The tag.
+        tag: String,
+        /// The protocol.
+        protocol: String,
+    },
+    /// Occurs when a constant subscript is outside the array. Example: `[4]INT a:` then `a[4]`.
+    OutOfBounds {
+        /// The subscript.
+        index: i64,
+        /// The array length.
+        len: u32,
+    },
+}
+
+impl DiagnosticKind {
+    /// Returns the one-line message: lower case, concrete, naming the thing.
+    pub fn message(&self) -> String {
+        use DiagnosticKind::*;
+        match self {
+            Undeclared { name } => format!("`{name}` is not declared"),
+            Duplicate { name } => format!("`{name}` is declared twice here"),
+            WrongKind {
+                name,
+                expected,
+                found,
+            } => {
+                format!("`{name}` is {found}, but {expected} is needed here")
+            }
+            TypeMismatch { expected, found } => {
+                format!("type mismatch: expected {expected}, found {found}")
+            }
+            BadOperand { op, ty } => format!("operator {op} cannot be applied to {ty}"),
+            NeedsParentheses => "different operators need parentheses in occam".into(),
+            ConstantError { what } => format!("constant {what}"),
+            NotConstant { context } => format!("{context} must be a constant"),
+            NotAssignable { name } => format!("`{name}` cannot be assigned: it is a constant"),
+            ArgumentCount {
+                name,
+                expected,
+                found,
+            } => {
+                format!("`{name}` takes {expected} parameters, but {found} were given")
+            }
+            ValueCount { expected, found } => {
+                format!("expected {expected} values, found {found}")
+            }
+            Protocol { what } => format!("protocol mismatch: {what}"),
+            Direction { name, used_for } => {
+                format!("`{name}` is used for {used_for} against its direction specifier")
+            }
+            Recursion { name } => format!("`{name}` calls itself: occam does not allow recursion"),
+            ParUsage { name } => {
+                format!("`{name}` is written in one branch of this PAR and used in another")
+            }
+            ParChannel { name, used_for } => {
+                format!("`{name}` is used for {used_for} in more than one branch of this PAR")
+            }
+            Alias { name } => {
+                format!("`{name}` is aliased: it is used while another name for it is in scope")
+            }
+            RetypeSize { to, from } => {
+                format!("RETYPES size mismatch: the new type has {to} bytes, the value {from}")
+            }
+            Unsupported { what } => format!("{what} is not supported"),
+            NoSuchField { field, record } => format!("record {record} has no field `{field}`"),
+            NoSuchTag { tag, protocol } => format!("protocol {protocol} has no tag `{tag}`"),
+            OutOfBounds { index, len } => {
+                format!("subscript {index} is out of range for an array of {len} elements")
+            }
+        }
+    }
+
+    /// Returns the label text put under the offending span.
+    pub fn label(&self) -> String {
+        use DiagnosticKind::*;
+        match self {
+            Undeclared { .. } => "not found in scope".into(),
+            TypeMismatch { found, .. } => format!("this is {found}"),
+            NeedsParentheses => "this mixes operators".into(),
+            ParUsage { .. } | ParChannel { .. } => "in this branch".into(),
+            _ => "here".into(),
+        }
+    }
+
+    /// Returns help in occam terms where the fix is clear.
+    pub fn help(&self) -> Option<String> {
+        use DiagnosticKind::*;
+        match self {
+            NeedsParentheses => Some(
+                "write (a + b) * c: occam needs parentheses between different operators".into(),
+            ),
+            Undeclared { name } => Some(format!(
+                "declare `{name}` before this process, for example `INT {name}:`"
+            )),
+            ParUsage { name } => Some(format!(
+                "give each branch its own copy of `{name}`, or communicate it over a channel"
+            )),
+            ParChannel { .. } => Some(
+                "each channel has one reader and one writer in a PAR: use a channel per branch"
+                    .into(),
+            ),
+            Recursion { .. } => {
+                Some("rewrite the recursion as a loop (WHILE) with an explicit stack".into())
+            }
+            NotAssignable { name } => Some(format!(
+                "declare `{name}` as a variable (`INT {name}:`) rather than a VAL"
+            )),
+            _ => None,
+        }
+    }
+}
+
+/// One diagnostic: a kind, where it is, and optionally a related place.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Diagnostic {
+    /// What went wrong.
+    pub kind: DiagnosticKind,
+    /// The offending text.
+    pub span: Span,
+    /// A related place ("the other branch", "declared here"), with its label.
+    pub related: Option<(Span, String)>,
+    /// Error or warning.
+    pub severity: Severity,
+}
+
+impl Diagnostic {
+    /// Creates an error at `span`.
+    pub fn error(kind: DiagnosticKind, span: Span) -> Self {
+        Diagnostic {
+            kind,
+            span,
+            related: None,
+            severity: Severity::Error,
+        }
+    }
+
+    /// Adds a related span with its label.
+    pub fn with_related(mut self, span: Span, label: impl Into<String>) -> Self {
+        self.related = Some((span, label.into()));
+        self
+    }
+
+    /// Returns the one-line message.
+    pub fn message(&self) -> String {
+        self.kind.message()
+    }
+}
+
+impl std::fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.kind.message())
+    }
+}
+
+impl std::error::Error for Diagnostic {}
+
+impl miette::Diagnostic for Diagnostic {
+    fn severity(&self) -> Option<miette::Severity> {
+        Some(match self.severity {
+            Severity::Error => miette::Severity::Error,
+            Severity::Warning => miette::Severity::Warning,
+        })
+    }
+
+    fn help<'a>(&'a self) -> Option<Box<dyn std::fmt::Display + 'a>> {
+        self.kind
+            .help()
+            .map(|h| Box::new(h) as Box<dyn std::fmt::Display>)
+    }
+
+    fn labels(&self) -> Option<Box<dyn Iterator<Item = LabeledSpan> + '_>> {
+        let main = LabeledSpan::new_primary_with_span(
+            Some(self.kind.label()),
+            SourceSpan::from(self.span),
+        );
+        let related = self.related.iter().map(|(span, label)| {
+            LabeledSpan::new_with_span(Some(label.clone()), SourceSpan::from(*span))
+        });
+        Some(Box::new(std::iter::once(main).chain(related)))
+    }
+}
