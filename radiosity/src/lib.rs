@@ -1,2 +1,27 @@
-//! Radiosity kernels: scene loading, meshing, octree ray casting, form factors, progressive
-//! refinement and the sequential reference solver.
+//! Radiosity kernels and the sequential reference solver for CARM: scene loading (OBJ + MTL),
+//! meshing with D0 discontinuities and adaptive subdivision, a flattened octree traversed with
+//! Samet's neighbour finding, Wallace ray-cast form factors with an analytic near-field extension,
+//! progressive refinement with f64 energy accounts, and the outputs (report, convergence plot,
+//! image, PLY, probes).
+//!
+//! # Example
+//! ```
+//! use occ_radiosity::{mesh::{Mesh, MeshConfig}, scene::cornell, solver::{Solver, SolverConfig, Until}};
+//! let scene = cornell::load(true).unwrap();
+//! let mesh = Mesh::from_scene(&scene, MeshConfig { patch_size: 300.0, element_size: 150.0 });
+//! let config = SolverConfig { until: Until::Shots(3), ..SolverConfig::default() };
+//! let mut solver = Solver::new(&scene, mesh, config);
+//! solver.run(|_, _| {});
+//! assert!(solver.accounts.balance_error() < 1e-9);
+//! ```
+#![deny(missing_docs)]
+
+pub mod formfactor;
+pub mod geom;
+pub mod kernels;
+pub mod mesh;
+pub mod octree;
+pub mod output;
+pub mod rng;
+pub mod scene;
+pub mod solver;

@@ -1,0 +1,90 @@
+//! The kernels a node runs on the data it holds, as plain functions over plain data, ready to be
+//! registered as intrinsics of the process machine:
+//! - [`shoot_batch`]: form factors from a batch of sample points to one source patch;
+//! - [`occlusion_batch`]: answers for a batch of shadow rays;
+//! - [`Octree::voxel`](crate::octree::Octree::voxel): the geometry a voxel embeds.
+//!
+//! The structs that cross into occam are `#[repr(C)]` and hold only `f32`s.
+
+use glam::Vec3;
+
+use crate::formfactor::{FormFactorConfig, form_factor, source_samples};
+use crate::geom::Tri;
+use crate::mesh::Vertex;
+use crate::octree::{Octree, Traversal};
+use crate::rng::Pcg32;
+
+/// A sample point as a kernel receives it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SamplePoint {
+    /// Position on the surface.
+    pub pos: [f32; 3],
+    /// Unit normal.
+    pub normal: [f32; 3],
+    /// Where the form factor is evaluated (see [`Vertex::eval`]).
+    pub eval: [f32; 3],
+}
+
+impl From<&Vertex> for SamplePoint {
+    fn from(v: &Vertex) -> Self {
+        SamplePoint { pos: v.pos.to_array(), normal: v.normal.to_array(), eval: v.eval.to_array() }
+    }
+}
+
+/// A shadow ray: from `origin` towards `origin + dir`, hits counted for `tmin < t < tmax`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Ray {
+    /// Origin.
+    pub origin: [f32; 3],
+    /// Direction (not necessarily unit).
+    pub dir: [f32; 3],
+    /// Lower parameter bound.
+    pub tmin: f32,
+    /// Upper parameter bound.
+    pub tmax: f32,
+}
+
+/// What a batch did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BatchStats {
+    /// Form factors computed.
+    pub form_factors: u64,
+    /// Shadow rays cast.
+    pub rays: u64,
+    /// Form factors that used the analytic form.
+    pub analytic: u64,
+}
+
+/// Computes the form factor from each point of `points` to the source triangle `source`, into
+/// `out` (same length as `points`; extra entries are left alone). The source samples are drawn
+/// from `seed`, so a batch is reproducible.
+pub fn shoot_batch(
+    octree: &Octree,
+    source: &Tri,
+    points: &[SamplePoint],
+    config: &FormFactorConfig,
+    seed: u64,
+    out: &mut [f32],
+) -> BatchStats {
+    let mut rng = Pcg32::new(seed, 0x5eed);
+    let mut samples = Vec::with_capacity(config.rays as usize + 8);
+    let mut stats = BatchStats::default();
+    for (p, o) in points.iter().zip(out.iter_mut()) {
+        source_samples(source, config.rays, &mut rng, &mut samples);
+        let f = form_factor(Some(octree), Vec3::from(p.eval), Vec3::from(p.normal), source, &samples, config);
+        *o = f.value;
+        stats.form_factors += 1;
+        stats.rays += f.rays as u64;
+        stats.analytic += f.analytic as u64;
+    }
+    stats
+}
+
+/// Answers a batch of shadow rays into `out` (true: occluded).
+pub fn occlusion_batch(octree: &Octree, rays: &[Ray], mode: Traversal, out: &mut [bool]) {
+    for (r, o) in rays.iter().zip(out.iter_mut()) {
+        *o = octree.occluded(Vec3::from(r.origin), Vec3::from(r.dir), r.tmin, r.tmax, mode);
+    }
+}

@@ -1,0 +1,421 @@
+//! The sequential reference solver: progressive refinement radiosity (Cohen et al. 1988) with
+//! ray-cast vertex-to-source form factors (Wallace et al. 1989).
+//!
+//! Each shot takes the patch with the most unshot power, computes the form factor from every
+//! sample point to it ([`crate::kernels::shoot_batch`]), refines edges where the shot's
+//! contribution changes fast and is not linear, and books the power:
+//! - each element receives `A_e · ΔB_src · mean(F at its corners)`;
+//! - it absorbs `(1 - ρ)` of that and adds `ρ` of it to its patch's unshot power;
+//! - what no element received is booked as *escaped* (through openings, plus form-factor error).
+//!
+//! Accounts are kept in `f64` so that `emitted = absorbed + escaped + unshot` holds to rounding.
+
+use std::time::Instant;
+
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+use crate::formfactor::FormFactorConfig;
+use crate::kernels::{SamplePoint, shoot_batch};
+use crate::mesh::Mesh;
+use crate::octree::{Octree, OctreeConfig};
+use crate::scene::Scene;
+
+/// When to stop shooting.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub enum Until {
+    /// Stop when the unshot power is at most this fraction of the emitted power.
+    Unshot(f64),
+    /// Stop after this many shots.
+    Shots(u64),
+    /// Stop after this many seconds.
+    Seconds(f64),
+}
+
+impl std::str::FromStr for Until {
+    type Err = String;
+    /// Parses `unshot=0.001`, `shots=N` or `time=S`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (key, value) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected unshot=F, shots=N or time=S"))?;
+        let bad = |_| format!("`{value}` is not a valid number for `{key}`");
+        match key {
+            "unshot" => value.parse::<f64>().map_err(bad).and_then(|v| finite_non_negative(v).map(Until::Unshot)),
+            "shots" => value.parse::<u64>().map(Until::Shots).map_err(|_| format!("`{value}` is not a shot count")),
+            "time" => value.parse::<f64>().map_err(bad).and_then(|v| finite_non_negative(v).map(Until::Seconds)),
+            _ => Err(format!("unknown stopping rule `{key}` (expected unshot, shots or time)")),
+        }
+    }
+}
+
+fn finite_non_negative(v: f64) -> Result<f64, String> {
+    if v.is_finite() && v >= 0.0 { Ok(v) } else { Err(format!("{v} must be a finite number >= 0")) }
+}
+
+/// Adaptive subdivision settings.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct AdaptConfig {
+    /// Refine an edge when its ends' form factors differ by more than this fraction of the larger.
+    pub difference: f32,
+    /// ... and the midpoint differs from the linear interpolation by more than this fraction.
+    pub nonlinearity: f32,
+    /// Never split edges shorter than this (scene units).
+    pub min_edge: f32,
+    /// Only shots carrying at least this fraction of the emitted power refine.
+    pub min_shot_power: f64,
+    /// Refinement passes per shot (each can halve an edge once more).
+    pub passes: u32,
+}
+
+/// Solver settings.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct SolverConfig {
+    /// Form-factor kernel settings.
+    pub form_factor: FormFactorConfig,
+    /// Adaptive subdivision; `None` turns it off.
+    pub adapt: Option<AdaptConfig>,
+    /// Overshooting (over-relaxation) factor: a shot sends `overshoot ×` the unshot power and
+    /// leaves the rest (negative beyond 1) as unshot. 1 = plain progressive refinement.
+    pub overshoot: f64,
+    /// Stopping rule.
+    pub until: Until,
+    /// Hard limit on shots whatever the rule.
+    pub max_shots: u64,
+    /// Seed of the source sampling.
+    pub seed: u64,
+}
+
+impl Default for SolverConfig {
+    fn default() -> Self {
+        SolverConfig {
+            form_factor: FormFactorConfig::default(),
+            adapt: None,
+            overshoot: 1.0,
+            until: Until::Unshot(0.01),
+            max_shots: 1_000_000,
+            seed: 1,
+        }
+    }
+}
+
+/// Energy accounts (power, in radiosity × area units), per RGB channel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Accounts {
+    /// Total emitted power Σ E A.
+    pub emitted: [f64; 3],
+    /// Power absorbed by surfaces.
+    pub absorbed: [f64; 3],
+    /// Power shot that no surface received.
+    pub escaped: [f64; 3],
+    /// Power still to be shot.
+    pub unshot: [f64; 3],
+}
+
+impl Accounts {
+    /// Returns `|emitted - absorbed - escaped - unshot| / emitted`, worst channel.
+    pub fn balance_error(&self) -> f64 {
+        (0..3)
+            .map(|c| {
+                let e = self.emitted[c];
+                if e == 0.0 { 0.0 } else { (e - self.absorbed[c] - self.escaped[c] - self.unshot[c]).abs() / e }
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+/// One row of the convergence record.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ConvergencePoint {
+    /// Shots so far.
+    pub shots: u64,
+    /// Seconds since the solve started.
+    pub seconds: f64,
+    /// Unshot power / emitted power (sum over channels).
+    pub unshot_fraction: f64,
+    /// Sample points at this time.
+    pub vertices: usize,
+}
+
+/// Counters of a solve.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SolveStats {
+    /// Shots.
+    pub shots: u64,
+    /// Form factors computed.
+    pub form_factors: u64,
+    /// Shadow rays cast.
+    pub rays: u64,
+    /// Form factors that used the analytic form.
+    pub analytic_form_factors: u64,
+    /// Edges split by adaptive subdivision.
+    pub adaptive_splits: u64,
+    /// Seconds spent shooting.
+    pub seconds: f64,
+}
+
+/// The state of a progressive refinement solution.
+pub struct Solver<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The mesh (grows with adaptive subdivision).
+    pub mesh: Mesh,
+    /// The octree over the scene's triangles (visibility).
+    pub octree: Octree,
+    /// Irradiance gathered at each sample point (RGB).
+    pub irradiance: Vec<Vec3>,
+    /// Unshot power of each patch.
+    pub unshot: Vec<DVec3>,
+    /// Energy accounts.
+    pub accounts: Accounts,
+    /// Convergence record (one row per shot).
+    pub history: Vec<ConvergencePoint>,
+    /// Counters.
+    pub stats: SolveStats,
+    config: SolverConfig,
+    patch_area: Vec<f64>,
+    element_area: Vec<f64>,
+}
+
+impl<'a> Solver<'a> {
+    /// Prepares a solve: builds the octree and books the emitted power as unshot.
+    pub fn new(scene: &'a Scene, mesh: Mesh, config: SolverConfig) -> Solver<'a> {
+        let tris: Vec<_> = scene.triangles.iter().map(|t| t.tri).collect();
+        let octree = Octree::build(&tris, OctreeConfig::default());
+        let patch_area: Vec<f64> = mesh.patches.iter().map(|t| t.area() as f64).collect();
+        let element_area = mesh.elements.iter().map(|e| mesh.tri(e).area() as f64).collect();
+        let unshot: Vec<DVec3> = mesh
+            .patch_object
+            .iter()
+            .zip(&patch_area)
+            .map(|(&o, &a)| scene.objects[o as usize].emission.as_dvec3() * std::f64::consts::PI * a)
+            .collect();
+        let emitted = unshot.iter().fold(DVec3::ZERO, |s, u| s + *u).to_array();
+        Solver {
+            scene,
+            irradiance: vec![Vec3::ZERO; mesh.vertices.len()],
+            mesh,
+            octree,
+            unshot,
+            accounts: Accounts { emitted, unshot: emitted, ..Accounts::default() },
+            history: Vec::new(),
+            stats: SolveStats::default(),
+            config,
+            patch_area,
+            element_area,
+        }
+    }
+
+    /// Returns the unshot power as a fraction of the emitted power (channels summed).
+    pub fn unshot_fraction(&self) -> f64 {
+        let total: f64 = self.accounts.emitted.iter().sum();
+        let unshot: f64 = self.unshot.iter().map(|u| u.abs().element_sum()).sum();
+        if total > 0.0 { unshot / total } else { 0.0 }
+    }
+
+    /// Shoots until the stopping rule holds; `progress(shots, unshot_fraction)` is called after
+    /// every shot.
+    pub fn run(&mut self, mut progress: impl FnMut(u64, f64)) {
+        let start = Instant::now();
+        loop {
+            let done = match self.config.until {
+                Until::Unshot(f) => self.unshot_fraction() <= f,
+                Until::Shots(n) => self.stats.shots >= n,
+                Until::Seconds(s) => start.elapsed().as_secs_f64() >= s,
+            };
+            if done || self.stats.shots >= self.config.max_shots || !self.shoot_once() {
+                break;
+            }
+            self.history.push(ConvergencePoint {
+                shots: self.stats.shots,
+                seconds: start.elapsed().as_secs_f64(),
+                unshot_fraction: self.unshot_fraction(),
+                vertices: self.mesh.vertices.len(),
+            });
+            progress(self.stats.shots, self.unshot_fraction());
+        }
+        self.stats.seconds += start.elapsed().as_secs_f64();
+    }
+
+    /// Shoots the patch with the most unshot power; returns false when nothing is left.
+    pub fn shoot_once(&mut self) -> bool {
+        let Some(src) = self.pick_shooter() else { return false };
+        let shot = self.unshot[src] * self.config.overshoot;
+        self.unshot[src] -= shot;
+        let delta_b = (shot / self.patch_area[src]).as_vec3();
+        let factors = self.shoot_all(src);
+        let factors = self.refine(src, factors, shot);
+        self.book(src, shot, delta_b, &factors);
+        self.stats.shots += 1;
+        true
+    }
+
+    fn pick_shooter(&self) -> Option<usize> {
+        let (best, power) = self
+            .unshot
+            .iter()
+            .enumerate()
+            .map(|(i, u)| (i, u.abs().element_sum()))
+            .fold((0, 0.0), |b, x| if x.1 > b.1 { x } else { b });
+        (power > 0.0).then_some(best)
+    }
+
+    /// Form factors from every sample point to patch `src`.
+    fn shoot_all(&mut self, src: usize) -> Vec<f32> {
+        let points: Vec<SamplePoint> = self.mesh.vertices.iter().map(SamplePoint::from).collect();
+        self.shoot_points(src, &points)
+    }
+
+    fn shoot_points(&mut self, src: usize, points: &[SamplePoint]) -> Vec<f32> {
+        let source = self.mesh.patches[src];
+        let seed = self.config.seed ^ (self.stats.shots << 20) ^ src as u64;
+        let config = self.config.form_factor;
+        let octree = &self.octree;
+        let chunks: Vec<(Vec<f32>, crate::kernels::BatchStats)> = points
+            .par_chunks(256)
+            .enumerate()
+            .map(|(i, chunk)| {
+                let mut out = vec![0.0; chunk.len()];
+                let stats = shoot_batch(octree, &source, chunk, &config, seed.wrapping_add(i as u64 * 7919), &mut out);
+                (out, stats)
+            })
+            .collect();
+        let mut factors = Vec::with_capacity(points.len());
+        for (f, s) in chunks {
+            factors.extend(f);
+            self.stats.form_factors += s.form_factors;
+            self.stats.rays += s.rays;
+            self.stats.analytic_form_factors += s.analytic;
+        }
+        factors
+    }
+
+    /// Adaptive subdivision for this shot: split edges whose form factors differ strongly and
+    /// are not linear along the edge. Returns the factors extended to the new sample points.
+    fn refine(&mut self, src: usize, mut factors: Vec<f32>, shot: DVec3) -> Vec<f32> {
+        let Some(adapt) = self.config.adapt else { return factors };
+        let emitted: f64 = self.accounts.emitted.iter().sum();
+        if shot.abs().element_sum() < adapt.min_shot_power * emitted {
+            return factors;
+        }
+        for _ in 0..adapt.passes {
+            let candidates: Vec<(u32, u32)> = self
+                .mesh
+                .edge_list()
+                .into_iter()
+                .filter(|&(a, b)| {
+                    let (fa, fb) = (factors[a as usize], factors[b as usize]);
+                    let len = (self.mesh.vertices[a as usize].pos - self.mesh.vertices[b as usize].pos).length();
+                    len > 2.0 * adapt.min_edge && (fa - fb).abs() > adapt.difference * fa.max(fb)
+                })
+                .collect();
+            if candidates.is_empty() {
+                break;
+            }
+            let mids: Vec<SamplePoint> = candidates.iter().map(|&(a, b)| self.midpoint(a, b)).collect();
+            let mid_f = self.shoot_points(src, &mids);
+            let mut split = 0;
+            for (&(a, b), (m, fm)) in candidates.iter().zip(mids.iter().zip(mid_f)) {
+                let linear = 0.5 * (factors[a as usize] + factors[b as usize]);
+                let scale = factors[a as usize].max(factors[b as usize]).max(1e-12);
+                if (fm - linear).abs() <= adapt.nonlinearity * scale {
+                    continue;
+                }
+                let v = self.mesh.add_edge_vertex(a, b, Vec3::from(m.pos));
+                self.mesh.vertices[v as usize].eval = Vec3::from(m.eval);
+                let h = 0.5 * (self.irradiance[a as usize] + self.irradiance[b as usize]);
+                self.irradiance.push(h);
+                factors.push(fm);
+                let before = self.mesh.elements.len();
+                let shrunk = self.mesh.split_edge(a, b, v);
+                self.fix_split_areas(before, &shrunk);
+                split += 1;
+            }
+            self.stats.adaptive_splits += split;
+            if split == 0 {
+                break;
+            }
+        }
+        factors
+    }
+
+    fn midpoint(&self, a: u32, b: u32) -> SamplePoint {
+        let (va, vb) = (self.mesh.vertices[a as usize], self.mesh.vertices[b as usize]);
+        SamplePoint {
+            pos: ((va.pos + vb.pos) * 0.5).to_array(),
+            normal: (va.normal + vb.normal).normalize_or(va.normal).to_array(),
+            eval: ((va.eval + vb.eval) * 0.5).to_array(),
+        }
+    }
+
+    /// Recomputes element areas after a split appended elements from index `before` and shrank
+    /// the elements `shrunk`.
+    fn fix_split_areas(&mut self, before: usize, shrunk: &[u32]) {
+        self.element_area.resize(self.mesh.elements.len(), 0.0);
+        let touched = shrunk.iter().map(|&i| i as usize).chain(before..self.mesh.elements.len());
+        for i in touched {
+            self.element_area[i] = self.mesh.tri(&self.mesh.elements[i]).area() as f64;
+        }
+    }
+
+    /// Books one shot: irradiance at sample points, power into elements, unshot and absorbed.
+    fn book(&mut self, _src: usize, shot: DVec3, delta_b: Vec3, factors: &[f32]) {
+        for (h, &f) in self.irradiance.iter_mut().zip(factors) {
+            *h += delta_b * f;
+        }
+        let db = delta_b.as_dvec3();
+        let mut received = DVec3::ZERO;
+        let mut absorbed = DVec3::ZERO;
+        for (e, &area) in self.mesh.elements.iter().zip(&self.element_area) {
+            let f = e.v.iter().map(|&v| factors[v as usize] as f64).sum::<f64>() / 3.0;
+            let power = db * (f * area);
+            let rho = self.scene.objects[e.object as usize].reflectance.as_dvec3();
+            received += power;
+            absorbed += power * (DVec3::ONE - rho);
+            self.unshot[e.patch as usize] += power * rho;
+        }
+        let acc = &mut self.accounts;
+        for c in 0..3 {
+            acc.absorbed[c] += absorbed[c];
+            acc.escaped[c] += shot[c] - received[c];
+        }
+        let unshot = self.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
+        acc.unshot = unshot.to_array();
+    }
+
+    /// Returns the ambient term (Cohen et al. 1988): `Σ unshot / Σ A` times `1 / (1 - ρ_avg)`.
+    pub fn ambient(&self) -> Vec3 {
+        let total_area: f64 = self.element_area.iter().sum();
+        let mut rho = DVec3::ZERO;
+        for (e, &a) in self.mesh.elements.iter().zip(&self.element_area) {
+            rho += self.scene.objects[e.object as usize].reflectance.as_dvec3() * a;
+        }
+        let rho_avg = rho / total_area;
+        let unshot = self.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
+        (unshot / total_area / (DVec3::ONE - rho_avg).max(DVec3::splat(1e-6))).as_vec3()
+    }
+
+    /// Returns the radiosity B = E + ρ (H + ambient) at each corner of element `e`.
+    pub fn element_corner_radiosity(&self, e: usize, ambient: Vec3) -> [Vec3; 3] {
+        let el = &self.mesh.elements[e];
+        let obj = &self.scene.objects[el.object as usize];
+        let emitted = obj.emission * std::f32::consts::PI;
+        el.v.map(|v| emitted + obj.reflectance * (self.irradiance[v as usize] + ambient))
+    }
+
+    /// Returns per-object `(area, mean B)` (area-weighted over elements; no ambient term).
+    pub fn object_means(&self) -> Vec<(f64, DVec3)> {
+        let mut out = vec![(0.0, DVec3::ZERO); self.scene.objects.len()];
+        for (i, e) in self.mesh.elements.iter().enumerate() {
+            let b = self.element_corner_radiosity(i, Vec3::ZERO);
+            let mean = (b[0] + b[1] + b[2]).as_dvec3() / 3.0;
+            let a = self.element_area[i];
+            out[e.object as usize].0 += a;
+            out[e.object as usize].1 += mean * a;
+        }
+        out.into_iter().map(|(a, s)| (a, if a > 0.0 { s / a } else { DVec3::ZERO })).collect()
+    }
+
+    /// Returns the configuration.
+    pub fn config(&self) -> &SolverConfig {
+        &self.config
+    }
+}
