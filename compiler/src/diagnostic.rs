@@ -63,6 +63,18 @@ pub enum DiagnosticKind {
         /// What happened ("overflow in INT16 expression").
         what: String,
     },
+    /// Occurs when a REAL is converted to an integer type without ROUND or TRUNC. Example: `INT x` for a REAL32 `x`.
+    NeedsRounding {
+        /// The source type.
+        from: &'static str,
+        /// The target type.
+        to: &'static str,
+    },
+    /// Occurs when two options of a CASE select the same value. Example: `CASE x` / `1` ... `1`.
+    DuplicateOption {
+        /// The value, as written.
+        value: String,
+    },
     /// Occurs when a constant is required and the expression is not one. Example: `[n]INT a:` with a variable `n`.
     NotConstant {
         /// Where a constant was needed ("array size", "CASE option").
@@ -181,6 +193,10 @@ impl DiagnosticKind {
             BadOperand { op, ty } => format!("operator {op} cannot be applied to {ty}"),
             NeedsParentheses => "different operators need parentheses in occam".into(),
             ConstantError { what } => format!("constant {what}"),
+            NeedsRounding { from, to } => {
+                format!("conversion from {from} to {to} needs ROUND or TRUNC")
+            }
+            DuplicateOption { value } => format!("CASE option {value} appears more than once"),
             NotConstant { context } => format!("{context} must be a constant"),
             NotAssignable { name } => format!("`{name}` cannot be assigned: it is a constant"),
             ArgumentCount {
@@ -251,6 +267,9 @@ impl DiagnosticKind {
             Recursion { .. } => {
                 Some("rewrite the recursion as a loop (WHILE) with an explicit stack".into())
             }
+            NeedsRounding { to, .. } => Some(format!(
+                "write `{to} ROUND x` (nearest) or `{to} TRUNC x` (toward zero)"
+            )),
             NotAssignable { name } => Some(format!(
                 "declare `{name}` as a variable (`INT {name}:`) rather than a VAL"
             )),

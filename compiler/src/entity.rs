@@ -92,3 +92,10 @@ impl<K: EntityRef, V> std::ops::Index<K> for PrimaryMap<K, V> {
         &self.items[key.index()]
     }
 }
+
+impl<K: EntityRef, V> std::ops::IndexMut<K> for PrimaryMap<K, V> {
+    /// Panics only when `key` came from another map, which is a compiler bug.
+    fn index_mut(&mut self, key: K) -> &mut V {
+        &mut self.items[key.index()]
+    }
+}

@@ -3,10 +3,28 @@
 
 #![deny(missing_docs)]
 #![deny(unsafe_code)]
-#![deny(clippy::unwrap_used)]
+#![cfg_attr(not(test), deny(clippy::unwrap_used))]
 
+mod check;
+pub mod checked;
 pub mod consteval;
 pub mod diagnostic;
 pub mod entity;
 pub mod predefined;
 pub mod types;
+pub mod usage;
+
+pub use checked::CheckedProgram;
+pub use diagnostic::{Diagnostic, DiagnosticKind, Severity};
+
+/// Checks a parsed program: resolves names, computes types and constants, and applies the usage
+/// and alias rules.
+///
+/// Returns the checked program when there are no errors, and every diagnostic found (the walk
+/// never stops at the first error). Spans in the diagnostics are offsets into the preprocessed
+/// text the program was parsed from. Never panics, whatever the AST.
+pub fn check(program: &occ_grammar::ast::Program) -> (Option<CheckedProgram>, Vec<Diagnostic>) {
+    let (checked, diags) = check::run(program);
+    let ok = diags.iter().all(|d| d.severity != Severity::Error);
+    (ok.then_some(checked), diags)
+}

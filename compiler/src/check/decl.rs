@@ -1,0 +1,514 @@
+//! Declarations (occam "specifications") and types as written.
+
+use occ_grammar::ast::{self, AbbrevMode, DeclKind, ParamMode};
+
+use super::Checker;
+use crate::checked::{ProcInfo, SymbolId, SymbolKind};
+use crate::diagnostic::DiagnosticKind;
+use crate::types::{
+    ChanProtocol, Direction, Prim, Protocol, ProtocolItem, ProtocolKind, Tag, Type, TypeDef,
+    TypeDefKind, bytes_in,
+};
+use crate::usage::{Access, Mode, Part};
+
+/// Converts a direction specifier.
+pub(super) fn direction(dir: Option<ast::Direction>) -> Direction {
+    match dir {
+        Some(ast::Direction::Input) => Direction::Input,
+        Some(ast::Direction::Output) => Direction::Output,
+        None => Direction::Both,
+    }
+}
+
+/// Applies a direction specifier to a channel type or to the channels of a channel array.
+pub(super) fn with_direction(ty: Type, dir: Direction) -> Type {
+    match ty {
+        Type::Chan(p, _) if dir != Direction::Both => Type::Chan(p, dir),
+        Type::Array(n, e) => Type::Array(n, Box::new(with_direction(*e, dir))),
+        other => other,
+    }
+}
+
+impl Checker {
+    /// Resolves a type as written.
+    pub(super) fn ty(&mut self, t: &ast::Ty) -> Type {
+        use ast::TyKind as K;
+        match &t.kind {
+            K::Bool => Type::Prim(Prim::Bool),
+            K::Byte => Type::Prim(Prim::Byte),
+            K::Int => Type::Prim(Prim::Int),
+            K::Int16 => Type::Prim(Prim::Int16),
+            K::Int32 => Type::Prim(Prim::Int32),
+            K::Int64 => Type::Prim(Prim::Int64),
+            K::Real32 => Type::Prim(Prim::Real32),
+            K::Real64 => Type::Prim(Prim::Real64),
+            K::Timer => Type::Timer,
+            K::Named(name) => self.named_type(name),
+            K::Array { len, elem } => {
+                let n = len.as_ref().and_then(|e| self.const_len(e));
+                let elem = self.ty(elem);
+                Type::array(n, elem)
+            }
+            K::Chan(item) => Type::Chan(Box::new(self.chan_protocol(item)), Direction::Both),
+            K::Port(elem) => Type::Port(Box::new(self.ty(elem))),
+        }
+    }
+
+    fn named_type(&mut self, name: &ast::Name) -> Type {
+        let Some(id) = self.lookup(name) else {
+            return Type::Error;
+        };
+        match self.sym(id).kind {
+            SymbolKind::DataType(def) => Type::Named(def),
+            _ => {
+                let found = kind_name(&self.sym(id).kind);
+                let kind = DiagnosticKind::WrongKind {
+                    name: name.text.clone(),
+                    expected: "a type",
+                    found,
+                };
+                self.error(kind, name.span);
+                Type::Error
+            }
+        }
+    }
+
+    /// Evaluates an array length: a constant INT, at least 0.
+    pub(super) fn const_len(&mut self, e: &ast::Expr) -> Option<u32> {
+        let t = self.expr(e, Some(&Type::INT));
+        self.expect_type(&Type::INT, &t.ty, e.span);
+        match t.value.as_ref().and_then(|v| v.as_int()) {
+            Some(n) => match u32::try_from(n) {
+                Ok(n) => Some(n),
+                Err(_) => {
+                    let what = format!("array size {n} is negative or too large");
+                    self.error(DiagnosticKind::ConstantError { what }, e.span);
+                    None
+                }
+            },
+            None => {
+                if !t.ty.is_error() {
+                    self.error(
+                        DiagnosticKind::NotConstant {
+                            context: "an array size",
+                        },
+                        e.span,
+                    );
+                }
+                None
+            }
+        }
+    }
+
+    fn chan_protocol(&mut self, item: &ast::ProtoItem) -> ChanProtocol {
+        if let ast::ProtoItemKind::Type(ast::Ty {
+            kind: ast::TyKind::Named(name),
+            ..
+        }) = &item.kind
+            && let Some(id) = self.scope_lookup_quiet(name)
+            && let SymbolKind::Protocol(p) = self.sym(id).kind
+        {
+            self.out.names.insert(name.span, id);
+            return ChanProtocol::Named(p);
+        }
+        match &item.kind {
+            ast::ProtoItemKind::Any => ChanProtocol::Any,
+            _ => ChanProtocol::Simple(self.proto_item(item)),
+        }
+    }
+
+    fn scope_lookup_quiet(&self, name: &ast::Name) -> Option<SymbolId> {
+        self.scope.lookup(&name.text)
+    }
+
+    fn proto_item(&mut self, item: &ast::ProtoItem) -> ProtocolItem {
+        match &item.kind {
+            ast::ProtoItemKind::Any => ProtocolItem::Data(Type::Error),
+            ast::ProtoItemKind::Type(t) => ProtocolItem::Data(self.ty(t)),
+            ast::ProtoItemKind::Counted { count, elem } => {
+                let count_ty = self.ty(count);
+                let count = match self.out.types.prim(&count_ty) {
+                    Some(p) if p.is_integer() => p,
+                    _ => {
+                        self.expect_type(&Type::INT, &count_ty, count.span);
+                        Prim::Int
+                    }
+                };
+                let elem = match self.ty(elem) {
+                    Type::Array(_, e) => *e,
+                    other => other,
+                };
+                ProtocolItem::Counted { count, elem }
+            }
+        }
+    }
+
+    /// Checks declarations in the current scope, in order.
+    pub(super) fn decls(&mut self, decls: &[ast::Decl]) {
+        for d in decls {
+            self.decl(d);
+        }
+    }
+
+    /// Checks one declaration and declares its names.
+    pub(super) fn decl(&mut self, d: &ast::Decl) {
+        match &d.kind {
+            DeclKind::Var { ty, names } => {
+                let ty = self.ty(ty);
+                let assignable = ty.is_data();
+                for name in names {
+                    self.declare(name, SymbolKind::Variable, ty.clone(), assignable);
+                }
+            }
+            DeclKind::Abbrev {
+                mode,
+                ty,
+                name,
+                dir,
+                value,
+            } => self.abbrev(*mode, ty.as_ref(), name, *dir, value),
+            DeclKind::Retypes {
+                kind,
+                val,
+                ty,
+                name,
+                value,
+            } => self.retypes(*kind, *val, ty, name, value),
+            DeclKind::DataType { name, def } => self.data_type(name, def),
+            DeclKind::Protocol { name, def } => self.protocol(name, def),
+            DeclKind::Proc {
+                name, params, body, ..
+            } => self.proc_decl(name, params, &[], None, Some(body)),
+            DeclKind::Function {
+                name,
+                results,
+                params,
+                body,
+                ..
+            } => self.proc_decl(name, params, results, Some(body), None),
+            DeclKind::Place { name, at } => {
+                self.lookup(name);
+                let t = self.expr(at, Some(&Type::INT));
+                self.expect_type(&Type::INT, &t.ty, at.span);
+            }
+            DeclKind::Asm(_) => {}
+        }
+    }
+
+    fn abbrev(
+        &mut self,
+        mode: AbbrevMode,
+        ty: Option<&ast::Ty>,
+        name: &ast::Name,
+        dir: Option<ast::Direction>,
+        value: &ast::Expr,
+    ) {
+        let want = ty.map(|t| self.ty(t));
+        let is_element = super::place::is_element(value);
+        if matches!(mode, AbbrevMode::Val | AbbrevMode::Initial) || !is_element {
+            let t = self.expr(value, want.as_ref());
+            let ty = self.declared_type(want, t.ty.clone(), value.span);
+            if mode == AbbrevMode::Initial {
+                self.declare(name, SymbolKind::Abbrev { mode }, ty, true);
+                return;
+            }
+            let id = self.declare(name, SymbolKind::Val { value: t.value }, ty, false);
+            if let Some(target) = t.target {
+                self.abbreviated.push(super::Abbreviated {
+                    target,
+                    alias: id,
+                    val: true,
+                });
+            }
+            return;
+        }
+        let p = self.place(value, None);
+        let ty = self.declared_type(want, p.ty, value.span);
+        let ty = with_direction(ty, direction(dir));
+        let id = self.declare(name, SymbolKind::Abbrev { mode }, ty, p.assignable);
+        if let Some(target) = p.target {
+            self.out.symbols[id].alias_of = Some(target);
+            self.abbreviated.push(super::Abbreviated {
+                target,
+                alias: id,
+                val: false,
+            });
+        }
+    }
+
+    /// The type of an abbreviation: the written one (checked against the value) or the value's.
+    fn declared_type(&mut self, want: Option<Type>, found: Type, span: ast::Span) -> Type {
+        match want {
+            Some(w) => {
+                self.expect_type(&w, &found, span);
+                match (&w, &found) {
+                    (Type::Array(None, _), Type::Array(Some(_), _)) => found,
+                    _ => w,
+                }
+            }
+            None => found,
+        }
+    }
+
+    fn retypes(
+        &mut self,
+        kind: ast::RetypeKind,
+        val: bool,
+        ty: &ast::Ty,
+        name: &ast::Name,
+        value: &ast::Expr,
+    ) {
+        let to = self.ty(ty);
+        let (from, target, assignable) = if val || !super::place::is_element(value) {
+            let t = self.expr(value, None);
+            (t.ty, None, false)
+        } else {
+            let p = self.place(value, None);
+            (p.ty, p.target, p.assignable)
+        };
+        if kind == ast::RetypeKind::Retypes {
+            self.retype_sizes(&to, &from, value.span);
+        }
+        let sym_kind = if val {
+            SymbolKind::Val { value: None }
+        } else {
+            SymbolKind::Abbrev {
+                mode: AbbrevMode::Ref,
+            }
+        };
+        let id = self.declare(name, sym_kind, to, assignable && !val);
+        if let Some(t) = target {
+            let whole = Access {
+                part: Part::Whole,
+                mode: Mode::Read,
+                ..t
+            };
+            self.out.symbols[id].alias_of = Some(whole);
+            self.abbreviated.push(super::Abbreviated {
+                target: whole,
+                alias: id,
+                val: false,
+            });
+        }
+    }
+
+    fn retype_sizes(&mut self, to: &Type, from: &Type, span: ast::Span) {
+        let Ok(from_bytes) = bytes_in(&self.out.types, from) else {
+            return;
+        };
+        let to_bytes = match to {
+            Type::Array(None, e) => match bytes_in(&self.out.types, e) {
+                Ok(b) if b > 0 && from_bytes % b == 0 => return,
+                Ok(b) => b,
+                Err(_) => return,
+            },
+            _ => match bytes_in(&self.out.types, to) {
+                Ok(b) => b,
+                Err(_) => return,
+            },
+        };
+        if to_bytes != from_bytes {
+            self.error(
+                DiagnosticKind::RetypeSize {
+                    to: to_bytes,
+                    from: from_bytes,
+                },
+                span,
+            );
+        }
+    }
+
+    fn data_type(&mut self, name: &ast::Name, def: &ast::DataTypeDef) {
+        let kind = match def {
+            ast::DataTypeDef::Alias(t) => TypeDefKind::Alias(self.ty(t)),
+            ast::DataTypeDef::Record { packed, fields } => {
+                let mut out: Vec<(String, crate::types::Type)> = Vec::new();
+                for f in fields {
+                    let ty = self.ty(&f.ty);
+                    for n in &f.names {
+                        if out.iter().any(|(x, _)| *x == n.text) {
+                            self.error(
+                                DiagnosticKind::Duplicate {
+                                    name: n.text.clone(),
+                                },
+                                n.span,
+                            );
+                        }
+                        out.push((n.text.clone(), ty.clone()));
+                    }
+                }
+                TypeDefKind::Record {
+                    packed: *packed,
+                    fields: out,
+                }
+            }
+        };
+        let id = self.out.types.defs.push(TypeDef {
+            name: name.text.clone(),
+            kind,
+        });
+        self.declare(name, SymbolKind::DataType(id), Type::Error, false);
+    }
+
+    fn protocol(&mut self, name: &ast::Name, def: &ast::ProtocolDef) {
+        let kind = match def {
+            ast::ProtocolDef::Sequential(items) => {
+                ProtocolKind::Sequential(items.iter().map(|i| self.proto_item(i)).collect())
+            }
+            ast::ProtocolDef::Tagged(cases) => ProtocolKind::Tagged(
+                cases
+                    .iter()
+                    .map(|c| Tag {
+                        name: c.tag.text.clone(),
+                        items: c.items.iter().map(|i| self.proto_item(i)).collect(),
+                    })
+                    .collect(),
+            ),
+        };
+        let id = self.out.types.protocols.push(Protocol {
+            name: name.text.clone(),
+            kind,
+        });
+        self.declare(name, SymbolKind::Protocol(id), Type::Error, false);
+    }
+
+    fn proc_decl(
+        &mut self,
+        name: &ast::Name,
+        params: &[ast::Param],
+        results: &[ast::Ty],
+        function: Option<&ast::FunctionBody>,
+        body: Option<&ast::Process>,
+    ) {
+        let results: Vec<Type> = results.iter().map(|t| self.ty(t)).collect();
+        let info = ProcInfo {
+            name: name.text.clone(),
+            symbol: None,
+            params: Vec::new(),
+            results,
+            usage: Vec::new(),
+        };
+        let pid = self.out.procs.push(info);
+        let mark = self.open_scope();
+        let first = self.next_symbol();
+        let params: Vec<SymbolId> = params
+            .iter()
+            .enumerate()
+            .map(|(i, p)| self.param(p, pid, i, first))
+            .collect();
+        self.open_procs.push(name.text.clone());
+        self.push_frame();
+        if let Some(body) = body {
+            self.process(body);
+        }
+        if let Some(f) = function {
+            self.function_body(pid, f);
+        }
+        let usage = self.pop_frame();
+        self.open_procs.pop();
+        self.close_scope(mark);
+        let usage = summarise(usage, first, &params);
+        let kind = if function.is_some() {
+            SymbolKind::Function(pid)
+        } else {
+            SymbolKind::Proc(pid)
+        };
+        let id = self.declare(name, kind, Type::Error, false);
+        let info = &mut self.out.procs[pid];
+        info.symbol = Some(id);
+        info.params = params;
+        info.usage = usage;
+    }
+
+    fn param(
+        &mut self,
+        p: &ast::Param,
+        owner: crate::checked::ProcId,
+        index: usize,
+        first: SymbolId,
+    ) -> SymbolId {
+        let ty = with_direction(self.ty(&p.ty), direction(p.dir));
+        let assignable = p.mode != ParamMode::Val && ty.is_data();
+        let kind = SymbolKind::Param {
+            mode: p.mode,
+            owner,
+            index,
+        };
+        if self
+            .scope
+            .lookup(&p.name.text)
+            .is_some_and(|id| id >= first)
+        {
+            self.error(
+                DiagnosticKind::Duplicate {
+                    name: p.name.text.clone(),
+                },
+                p.name.span,
+            );
+        }
+        self.declare(&p.name, kind, ty, assignable)
+    }
+
+    fn function_body(&mut self, pid: crate::checked::ProcId, body: &ast::FunctionBody) {
+        let results = self.out.procs[pid].results.clone();
+        match body {
+            ast::FunctionBody::Valof(v) => {
+                let found = self.valof(v, &results);
+                if found != results.len() {
+                    self.error(
+                        DiagnosticKind::ValueCount {
+                            expected: results.len(),
+                            found,
+                        },
+                        v.span,
+                    );
+                }
+            }
+            ast::FunctionBody::Is(exprs) => {
+                if exprs.len() != results.len() {
+                    let span = exprs.first().map_or_else(Default::default, |e| e.span);
+                    self.error(
+                        DiagnosticKind::ValueCount {
+                            expected: results.len(),
+                            found: exprs.len(),
+                        },
+                        span,
+                    );
+                }
+                for (e, want) in exprs.iter().zip(&results) {
+                    let t = self.expr(e, Some(want));
+                    self.expect_type(want, &t.ty, e.span);
+                }
+            }
+        }
+    }
+}
+
+/// Keeps the accesses that matter outside a PROC body: to its parameters and to variables
+/// declared before it. Subscripts that depend on the body's own replicators become whole.
+fn summarise(mut usage: Vec<Access>, first: SymbolId, params: &[SymbolId]) -> Vec<Access> {
+    usage.retain(|a| a.symbol < first || params.contains(&a.symbol));
+    for a in &mut usage {
+        if let Part::Range { start, .. } = a.part
+            && start.var.is_some()
+        {
+            a.part = Part::Whole;
+        }
+    }
+    crate::usage::dedup(&mut usage);
+    usage
+}
+
+/// Names a kind of symbol for messages ("a variable").
+pub(super) fn kind_name(kind: &SymbolKind) -> &'static str {
+    match kind {
+        SymbolKind::Variable | SymbolKind::Abbrev { .. } | SymbolKind::Param { .. } => "a variable",
+        SymbolKind::Val { .. } | SymbolKind::Replicator => "a constant",
+        SymbolKind::Proc(_) => "a PROC",
+        SymbolKind::Function(_) => "a FUNCTION",
+        SymbolKind::DataType(_) => "a data type",
+        SymbolKind::Protocol(_) => "a PROTOCOL",
+        SymbolKind::Predefined(p) if p.is_proc() => "a predefined PROC",
+        SymbolKind::Predefined(_) => "a predefined FUNCTION",
+    }
+}

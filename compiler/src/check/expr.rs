@@ -1,0 +1,471 @@
+//! Expressions: types (with untyped literals taking their type from context, as occ21 does),
+//! constant folding, and the accesses they make.
+
+use occ_grammar::ast::{self, BinOp, Expr, ExprKind, LitKind, TypeOrExpr};
+
+use super::Checker;
+use crate::checked::SymbolKind;
+use crate::consteval::{self, ConstError, Value};
+use crate::diagnostic::DiagnosticKind;
+use crate::types::{Prim, Type, bytes_in, offset_of};
+use crate::usage::Access;
+
+/// An expression after checking.
+#[derive(Debug, Clone)]
+pub(super) struct Typed {
+    /// Its type.
+    pub ty: Type,
+    /// Its value, when it is a compile-time constant.
+    pub value: Option<Value>,
+    /// The storage it denotes, when it is an element.
+    pub target: Option<Access>,
+}
+
+impl Typed {
+    fn of(ty: Type) -> Typed {
+        Typed {
+            ty,
+            value: None,
+            target: None,
+        }
+    }
+
+    fn constant(ty: Type, value: Option<Value>) -> Typed {
+        Typed {
+            ty,
+            value,
+            target: None,
+        }
+    }
+}
+
+/// Reports whether an expression's type comes only from context (untyped literals).
+fn is_untyped(e: &Expr) -> bool {
+    match &e.kind {
+        ExprKind::Literal(l) => {
+            l.ty.is_none()
+                && matches!(
+                    l.kind,
+                    LitKind::Int { .. } | LitKind::Byte(_) | LitKind::Real(_)
+                )
+        }
+        ExprKind::Unary { operand, .. } => is_untyped(operand),
+        ExprKind::Binary { lhs, rhs, op } => {
+            !consteval::is_relational(*op) && is_untyped(lhs) && is_untyped(rhs)
+        }
+        _ => false,
+    }
+}
+
+/// Describes a constant error for the message "constant ...".
+pub(super) fn const_error_text(e: &ConstError) -> String {
+    match e {
+        ConstError::Overflow(p) => format!("overflow in {} expression", p.name()),
+        ConstError::DivisionByZero => "division by zero".into(),
+        ConstError::ShiftCount(n) => format!("shift count {n} is out of range"),
+        ConstError::ConversionRange(p) => {
+            format!("value out of range in conversion to {}", p.name())
+        }
+        ConstError::LiteralRange(p) => format!("literal out of range for {}", p.name()),
+        _ => "expression is not valid".into(),
+    }
+}
+
+impl Checker {
+    /// Checks an expression; `want` is the type the context needs, which untyped literals take.
+    pub(super) fn expr(&mut self, e: &Expr, want: Option<&Type>) -> Typed {
+        let t = self.expr_kind(e, want);
+        self.out.expr_types.insert(e.span, t.ty.clone());
+        if let Some(v) = &t.value {
+            self.out.constants.insert(e.span, v.clone());
+        }
+        t
+    }
+
+    /// Reports a constant error at `span` and returns no value.
+    fn fold(&mut self, r: Result<Value, ConstError>, span: ast::Span) -> Option<Value> {
+        match r {
+            Ok(v) => Some(v),
+            Err(e) => {
+                self.error(
+                    DiagnosticKind::ConstantError {
+                        what: const_error_text(&e),
+                    },
+                    span,
+                );
+                None
+            }
+        }
+    }
+
+    fn expr_kind(&mut self, e: &Expr, want: Option<&Type>) -> Typed {
+        match &e.kind {
+            ExprKind::Literal(l) => self.literal(l, want, e.span, false),
+            ExprKind::Name(_)
+            | ExprKind::Subscript { .. }
+            | ExprKind::Slice { .. }
+            | ExprKind::Directed { .. } => {
+                let p = self.place(e, Some(crate::usage::Mode::Read));
+                Typed {
+                    ty: p.ty,
+                    value: p.value,
+                    target: p.target,
+                }
+            }
+            ExprKind::Unary { op, operand } => self.unary(*op, operand, want, e.span),
+            ExprKind::Binary { op, lhs, rhs } => self.binary(*op, lhs, rhs, want, e.span),
+            ExprKind::Conversion { ty, mode, operand } => {
+                let to = self.ty(ty);
+                self.conversion(to, *mode, operand, e.span)
+            }
+            ExprKind::MostPos(t) | ExprKind::MostNeg(t) => {
+                let ty = self.ty(t);
+                let pos = matches!(e.kind, ExprKind::MostPos(_));
+                let prim = self.out.types.prim(&ty).filter(|p| *p != Prim::Bool);
+                let value = prim.and_then(|p| {
+                    if pos {
+                        consteval::most_pos(p)
+                    } else {
+                        consteval::most_neg(p)
+                    }
+                });
+                if value.is_none() && !ty.is_error() {
+                    let op = if pos { "MOSTPOS" } else { "MOSTNEG" };
+                    self.error(
+                        DiagnosticKind::BadOperand {
+                            op,
+                            ty: self.out.types.display(&ty),
+                        },
+                        t.span,
+                    );
+                }
+                Typed::constant(ty, value)
+            }
+            ExprKind::Size(toe) => self.size(toe, e.span),
+            ExprKind::BytesIn(toe) => {
+                let ty = self.type_or_expr(toe);
+                let value = bytes_in(&self.out.types, &ty)
+                    .ok()
+                    .map(|b| Value::Int(i64::from(b)));
+                Typed::constant(Type::INT, value)
+            }
+            ExprKind::OffsetOf { ty, field } => {
+                let ty = self.ty(ty);
+                let r = offset_of(&self.out.types, &ty, &field.text);
+                if r.is_err() && !ty.is_error() {
+                    let record = self.out.types.display(&ty);
+                    self.error(
+                        DiagnosticKind::NoSuchField {
+                            field: field.text.clone(),
+                            record,
+                        },
+                        field.span,
+                    );
+                }
+                Typed::constant(Type::INT, r.ok().map(|b| Value::Int(i64::from(b))))
+            }
+            ExprKind::Call { name, args } => self.call_expr(name, args, want, e.span),
+            ExprKind::Table(items) => self.table(items, want, e.span),
+            ExprKind::Constructor { repl, value } => {
+                let mark = self.open_scope();
+                let r = self.replicator(repl);
+                let elem_want = want.and_then(Type::elem);
+                let t = self.expr(value, elem_want);
+                self.close_scope(mark);
+                let n = r.count.and_then(|c| u32::try_from(c).ok());
+                Typed::of(Type::array(n, t.ty))
+            }
+            ExprKind::Valof(v) => {
+                let wants: Vec<Type> = want.into_iter().cloned().collect();
+                let tys = self.valof_types(v, &wants);
+                if tys.len() != 1 {
+                    self.error(
+                        DiagnosticKind::ValueCount {
+                            expected: 1,
+                            found: tys.len(),
+                        },
+                        e.span,
+                    );
+                }
+                Typed::of(tys.into_iter().next().unwrap_or(Type::Error))
+            }
+        }
+    }
+
+    /// Types a literal: its written type, else the wanted type when it fits, else the default.
+    fn literal(
+        &mut self,
+        l: &ast::Literal,
+        want: Option<&Type>,
+        span: ast::Span,
+        negate: bool,
+    ) -> Typed {
+        let written = l.ty.as_ref().map(|t| self.ty(t));
+        let ctx = written.clone().or_else(|| want.cloned());
+        let ctx_prim = ctx.as_ref().and_then(|t| self.out.types.prim(t));
+        let (ty, r) = match &l.kind {
+            LitKind::Bool(b) => (Type::BOOL, Ok(Value::Bool(*b))),
+            LitKind::String(bytes) => {
+                let n = u32::try_from(bytes.len()).unwrap_or(u32::MAX);
+                (Type::array(Some(n), Type::BYTE), Ok(Value::string(bytes)))
+            }
+            LitKind::Byte(b) => match ctx_prim.filter(|p| p.is_integer()) {
+                Some(p) => (
+                    ctx.unwrap_or(Type::BYTE),
+                    integer(u64::from(*b), false, negate, p),
+                ),
+                None => (Type::BYTE, Ok(Value::Int(i64::from(*b)))),
+            },
+            LitKind::Int { value, hex } => match ctx_prim.filter(|p| p.is_numeric()) {
+                Some(p) => (ctx.unwrap_or(Type::INT), integer(*value, *hex, negate, p)),
+                None => (Type::INT, integer(*value, *hex, negate, Prim::Int)),
+            },
+            LitKind::Real(text) => {
+                let p = ctx_prim.filter(|p| p.is_real()).unwrap_or(Prim::Real64);
+                let text = if negate {
+                    format!("-{text}")
+                } else {
+                    text.clone()
+                };
+                let ty = ctx
+                    .filter(|_| ctx_prim.is_some_and(Prim::is_real))
+                    .unwrap_or(Type::Prim(p));
+                (ty, consteval::parse_real_literal(&text, p))
+            }
+        };
+        if let Some(w) = &written
+            && written.as_ref() != Some(&ty)
+        {
+            self.expect_type(w, &ty, span);
+        }
+        let value = self.fold(r, span);
+        Typed::constant(ty, value)
+    }
+
+    fn unary(
+        &mut self,
+        op: ast::UnOp,
+        operand: &Expr,
+        want: Option<&Type>,
+        span: ast::Span,
+    ) -> Typed {
+        if op == ast::UnOp::Neg
+            && let ExprKind::Literal(l) = &operand.kind
+            && matches!(l.kind, LitKind::Int { hex: false, .. } | LitKind::Real(_))
+        {
+            // `-2147483648` is MOSTNEG INT: fold the sign into the literal.
+            let t = self.literal(l, want, span, true);
+            self.out.expr_types.insert(operand.span, t.ty.clone());
+            return t;
+        }
+        let want = if op == ast::UnOp::Not {
+            Some(&Type::BOOL)
+        } else {
+            want
+        };
+        let t = self.expr(operand, want);
+        let Some(prim) = self.operand_prim(&t.ty, consteval::un_symbol(op), operand.span) else {
+            return Typed::of(t.ty);
+        };
+        if !consteval::un_accepts(op, prim) {
+            let ty = self.out.types.display(&t.ty);
+            self.error(
+                DiagnosticKind::BadOperand {
+                    op: consteval::un_symbol(op),
+                    ty,
+                },
+                span,
+            );
+            return Typed::of(Type::Error);
+        }
+        let value = t.value.map(|v| consteval::unary(op, prim, &v));
+        let value = value.and_then(|r| self.fold(r, span));
+        Typed::constant(t.ty, value)
+    }
+
+    /// Returns the primitive representation of an operand type, reporting non-primitive types.
+    fn operand_prim(&mut self, ty: &Type, op: &'static str, span: ast::Span) -> Option<Prim> {
+        let prim = self.out.types.prim(ty);
+        if prim.is_none() && !ty.is_error() {
+            self.error(
+                DiagnosticKind::BadOperand {
+                    op,
+                    ty: self.out.types.display(ty),
+                },
+                span,
+            );
+        }
+        prim
+    }
+
+    fn binary(
+        &mut self,
+        op: BinOp,
+        lhs: &Expr,
+        rhs: &Expr,
+        want: Option<&Type>,
+        span: ast::Span,
+    ) -> Typed {
+        let boolean = matches!(op, BinOp::And | BinOp::Or);
+        let want = if boolean {
+            Some(&Type::BOOL)
+        } else if consteval::is_relational(op) {
+            None
+        } else {
+            want
+        };
+        let (lt, rt) = if consteval::is_shift(op) {
+            let lt = self.expr(lhs, want);
+            let rt = self.expr(rhs, Some(&Type::INT));
+            self.expect_type(&Type::INT, &rt.ty, rhs.span);
+            (lt, rt)
+        } else if want.is_some() {
+            (self.expr(lhs, want), self.expr(rhs, want))
+        } else if is_untyped(lhs) && !is_untyped(rhs) {
+            let rt = self.expr(rhs, None);
+            (self.expr(lhs, Some(&rt.ty)), rt)
+        } else {
+            let lt = self.expr(lhs, None);
+            let rt = self.expr(rhs, Some(&lt.ty));
+            (lt, rt)
+        };
+        if !consteval::is_shift(op) && !self.expect_type(&lt.ty, &rt.ty, rhs.span) {
+            return Typed::of(Type::Error);
+        }
+        let sym = consteval::bin_symbol(op);
+        let result = if consteval::is_relational(op) {
+            Type::BOOL
+        } else {
+            lt.ty.clone()
+        };
+        let operand_ty = if lt.ty.is_error() {
+            rt.ty.clone()
+        } else {
+            lt.ty.clone()
+        };
+        let Some(prim) = self.operand_prim(&operand_ty, sym, span) else {
+            return Typed::of(result);
+        };
+        if !consteval::bin_accepts(op, prim) {
+            let ty = self.out.types.display(&operand_ty);
+            self.error(DiagnosticKind::BadOperand { op: sym, ty }, span);
+            return Typed::of(result);
+        }
+        let value = match (&lt.value, &rt.value) {
+            (Some(a), Some(b)) => {
+                let r = consteval::binary(op, prim, a, b);
+                self.fold(r, span)
+            }
+            _ => None,
+        };
+        Typed::constant(result, value)
+    }
+
+    /// Checks `T e`, `T ROUND e`, `T TRUNC e` (and `T (e)` for a named type).
+    pub(super) fn conversion(
+        &mut self,
+        to: Type,
+        mode: ast::ConvMode,
+        operand: &Expr,
+        span: ast::Span,
+    ) -> Typed {
+        let t = self.expr(operand, None);
+        let (Some(to_p), Some(from_p)) = (self.out.types.prim(&to), self.out.types.prim(&t.ty))
+        else {
+            if !to.is_error() && !t.ty.is_error() {
+                let ty = self.out.types.display(&t.ty);
+                self.error(
+                    DiagnosticKind::BadOperand {
+                        op: "conversion",
+                        ty,
+                    },
+                    span,
+                );
+            }
+            return Typed::of(to);
+        };
+        if from_p.is_real() && !to_p.is_real() && to_p != Prim::Bool && mode == ast::ConvMode::Plain
+        {
+            self.error(
+                DiagnosticKind::NeedsRounding {
+                    from: from_p.name(),
+                    to: to_p.name(),
+                },
+                span,
+            );
+            return Typed::of(to);
+        }
+        let value = t.value.map(|v| consteval::convert(to_p, mode, from_p, &v));
+        let value = value.and_then(|r| self.fold(r, span));
+        Typed::constant(to, value)
+    }
+
+    /// The type of a `SIZE` / `BYTESIN` operand: a type, or the type of an expression.
+    fn type_or_expr(&mut self, toe: &TypeOrExpr) -> Type {
+        match toe {
+            TypeOrExpr::Type(t) => self.ty(t),
+            TypeOrExpr::Expr(Expr {
+                kind: ExprKind::Name(n),
+                ..
+            }) if self
+                .scope
+                .lookup(&n.text)
+                .is_some_and(|id| matches!(self.sym(id).kind, SymbolKind::DataType(_))) =>
+            {
+                let id = self.lookup(n);
+                match id.map(|id| self.sym(id).kind.clone()) {
+                    Some(SymbolKind::DataType(d)) => Type::Named(d),
+                    _ => Type::Error,
+                }
+            }
+            TypeOrExpr::Expr(e) => self.expr(e, None).ty,
+        }
+    }
+
+    fn size(&mut self, toe: &TypeOrExpr, span: ast::Span) -> Typed {
+        let ty = self.type_or_expr(toe);
+        match self.out.types.underlying(&ty) {
+            Type::Array(n, _) => Typed::constant(Type::INT, n.map(|n| Value::Int(i64::from(n)))),
+            Type::Error => Typed::of(Type::INT),
+            other => {
+                let ty = self.out.types.display(other);
+                self.error(DiagnosticKind::BadOperand { op: "SIZE", ty }, span);
+                Typed::of(Type::INT)
+            }
+        }
+    }
+
+    fn table(&mut self, items: &[Expr], want: Option<&Type>, span: ast::Span) -> Typed {
+        let mut elem = want.and_then(Type::elem).cloned();
+        let mut values = Some(Vec::with_capacity(items.len()));
+        for item in items {
+            let t = self.expr(item, elem.as_ref());
+            match &elem {
+                Some(e) => {
+                    self.expect_type(e, &t.ty, item.span);
+                }
+                None => elem = Some(t.ty.clone()),
+            }
+            match (&mut values, t.value) {
+                (Some(vs), Some(v)) => vs.push(v),
+                _ => values = None,
+            }
+        }
+        let n = u32::try_from(items.len()).ok();
+        let _ = span;
+        Typed::constant(
+            Type::array(n, elem.unwrap_or(Type::Error)),
+            values.map(Value::Array),
+        )
+    }
+}
+
+/// Folds an integer literal (with an optional leading minus) into type `p`.
+fn integer(value: u64, hex: bool, negate: bool, p: Prim) -> Result<Value, ConstError> {
+    let text = match (hex, negate) {
+        (true, _) => format!("#{value:X}"),
+        (false, true) => format!("-{value}"),
+        (false, false) => value.to_string(),
+    };
+    consteval::parse_integer_literal(&text, p)
+}

@@ -1,0 +1,269 @@
+//! The checking pass: one walk over the AST that resolves names, computes types and constant
+//! values, and records usage for the PAR and alias rules.
+//!
+//! occam declares every name before its use, so resolution and typing need only one pass in
+//! source order. The walk never stops at an error: a name or expression with an error gets
+//! [`Type::Error`], which is compatible with everything, so one mistake gives one message.
+//!
+//! Invariants:
+//! - every symbol is declared in `out.symbols` before anything refers to it, so symbol ids grow
+//!   in declaration order and "declared outside this PAR" is `id < first id of the PAR`;
+//! - `frames` always has at least one frame; accesses are recorded in the innermost;
+//! - `abbreviated` lists, innermost last, the storage that a live abbreviation names.
+
+mod call;
+mod decl;
+mod expr;
+mod io;
+mod place;
+mod process;
+mod scope;
+#[cfg(test)]
+mod test;
+
+use std::collections::HashSet;
+
+use occ_grammar::ast::{self, Span};
+
+use crate::checked::{CheckedProgram, Symbol, SymbolId, SymbolKind};
+use crate::diagnostic::{Diagnostic, DiagnosticKind};
+use crate::entity::EntityRef;
+use crate::predefined::PREDEFINED;
+use crate::types::Type;
+use crate::usage::{Access, Mode, Part, may_overlap};
+use scope::Scope;
+
+/// A live constraint from an abbreviation: while it is in scope, `target` may not be used
+/// directly (reference abbreviation) or changed (VAL abbreviation of a variable).
+#[derive(Debug, Clone, Copy)]
+struct Abbreviated {
+    /// The storage the abbreviation names.
+    target: Access,
+    /// The abbreviation's own symbol (accesses through it are fine).
+    alias: SymbolId,
+    /// VAL abbreviation: only writes to the target are errors.
+    val: bool,
+}
+
+/// The checker's state.
+pub(crate) struct Checker {
+    /// What the checker produces.
+    pub out: CheckedProgram,
+    /// Every diagnostic so far.
+    pub diags: Vec<Diagnostic>,
+    scope: Scope,
+    frames: Vec<Vec<Access>>,
+    /// PROCs and FUNCTIONs whose bodies are being checked (for the recursion message).
+    open_procs: Vec<String>,
+    shared: HashSet<String>,
+    permit_aliases: HashSet<String>,
+    abbreviated: Vec<Abbreviated>,
+}
+
+/// Checks a program; see [`crate::check`].
+pub(crate) fn run(program: &ast::Program) -> (CheckedProgram, Vec<Diagnostic>) {
+    let mut c = Checker::new(program);
+    c.scope.open();
+    for decl in &program.decls {
+        c.decl(decl);
+    }
+    c.scope.close();
+    (c.out, c.diags)
+}
+
+impl Checker {
+    fn new(program: &ast::Program) -> Self {
+        let mut c = Checker {
+            out: CheckedProgram::default(),
+            diags: Vec::new(),
+            scope: Scope::default(),
+            frames: vec![Vec::new()],
+            open_procs: Vec::new(),
+            shared: HashSet::new(),
+            permit_aliases: HashSet::new(),
+            abbreviated: Vec::new(),
+        };
+        for pragma in &program.pragmas {
+            let set = match pragma.kind {
+                ast::PragmaKind::Shared => &mut c.shared,
+                ast::PragmaKind::PermitAliases => &mut c.permit_aliases,
+            };
+            set.extend(pragma.names.iter().map(|n| n.text.clone()));
+        }
+        c.scope.open();
+        for p in PREDEFINED {
+            let kind = SymbolKind::Predefined(p);
+            let id = c.new_symbol(p.name, Span::default(), kind, Type::Error, false);
+            c.scope.declare(p.name, id);
+        }
+        c
+    }
+
+    /// Reports an error.
+    fn error(&mut self, kind: DiagnosticKind, span: Span) {
+        self.diags.push(Diagnostic::error(kind, span));
+    }
+
+    /// Reports a type mismatch unless `found` may be used where `expected` is needed.
+    fn expect_type(&mut self, expected: &Type, found: &Type, span: Span) -> bool {
+        if self.out.types.compatible(expected, found) {
+            return true;
+        }
+        let kind = DiagnosticKind::TypeMismatch {
+            expected: self.out.types.display(expected),
+            found: self.out.types.display(found),
+        };
+        self.error(kind, span);
+        false
+    }
+
+    /// Creates a symbol without declaring it in scope.
+    fn new_symbol(
+        &mut self,
+        name: &str,
+        span: Span,
+        kind: SymbolKind,
+        ty: Type,
+        assignable: bool,
+    ) -> SymbolId {
+        self.out.symbols.push(Symbol {
+            name: name.to_string(),
+            span,
+            kind,
+            ty,
+            assignable,
+            alias_of: None,
+        })
+    }
+
+    /// Creates a symbol and declares it in the innermost scope.
+    fn declare(
+        &mut self,
+        name: &ast::Name,
+        kind: SymbolKind,
+        ty: Type,
+        assignable: bool,
+    ) -> SymbolId {
+        let id = self.new_symbol(&name.text, name.span, kind, ty, assignable);
+        self.scope.declare(&name.text, id);
+        self.out.names.insert(name.span, id);
+        id
+    }
+
+    /// Resolves a name, reporting it when undeclared.
+    fn lookup(&mut self, name: &ast::Name) -> Option<SymbolId> {
+        match self.scope.lookup(&name.text) {
+            Some(id) => {
+                self.out.names.insert(name.span, id);
+                Some(id)
+            }
+            None => {
+                let kind = if self.open_procs.contains(&name.text) {
+                    DiagnosticKind::Recursion {
+                        name: name.text.clone(),
+                    }
+                } else {
+                    DiagnosticKind::Undeclared {
+                        name: name.text.clone(),
+                    }
+                };
+                self.error(kind, name.span);
+                None
+            }
+        }
+    }
+
+    /// Returns the symbol.
+    fn sym(&self, id: SymbolId) -> &Symbol {
+        &self.out.symbols[id]
+    }
+
+    /// The id the next symbol will get: everything below it is declared already.
+    fn next_symbol(&self) -> SymbolId {
+        SymbolId::new(self.out.symbols.len())
+    }
+
+    /// Opens a scope (for declarations).
+    fn open_scope(&mut self) -> usize {
+        self.scope.open();
+        self.abbreviated.len()
+    }
+
+    /// Closes a scope opened by [`Checker::open_scope`].
+    fn close_scope(&mut self, mark: usize) {
+        self.scope.close();
+        self.abbreviated.truncate(mark);
+    }
+
+    /// Records an access, following reference abbreviations to the storage they name, and
+    /// checks it against live abbreviations.
+    fn record(&mut self, symbol: SymbolId, mode: Mode, part: Part, span: Span) {
+        let mut access = Access {
+            symbol,
+            mode,
+            part,
+            span,
+        };
+        let mut hops: Vec<SymbolId> = Vec::new();
+        for _ in 0..32 {
+            match self.sym(access.symbol).alias_of {
+                Some(target) => {
+                    hops.push(access.symbol);
+                    let part = if target.part == Part::Whole {
+                        access.part
+                    } else {
+                        target.part
+                    };
+                    access = Access {
+                        symbol: target.symbol,
+                        mode,
+                        part,
+                        span,
+                    };
+                }
+                None => break,
+            }
+        }
+        self.check_alias(access, &hops);
+        if let Some(frame) = self.frames.last_mut() {
+            frame.push(access);
+        }
+    }
+
+    /// Reports a direct use of storage that a live abbreviation names.
+    fn check_alias(&mut self, access: Access, hops: &[SymbolId]) {
+        let name = &self.sym(access.symbol).name;
+        if self.permit_aliases.contains(name) {
+            return;
+        }
+        let clash = self.abbreviated.iter().rev().find(|a| {
+            a.target.symbol == access.symbol
+                && !hops.contains(&a.alias)
+                && (!a.val || access.mode == Mode::Write)
+                && may_overlap(a.target.part, access.part)
+        });
+        if let Some(a) = clash {
+            let alias_span = self.sym(a.alias).span;
+            let d = Diagnostic::error(DiagnosticKind::Alias { name: name.clone() }, access.span)
+                .with_related(alias_span, "abbreviated here");
+            self.diags.push(d);
+        }
+    }
+
+    /// Starts collecting accesses separately (a PAR branch or a PROC body).
+    fn push_frame(&mut self) {
+        self.frames.push(Vec::new());
+    }
+
+    /// Stops collecting separately and returns what was collected.
+    fn pop_frame(&mut self) -> Vec<Access> {
+        self.frames.pop().unwrap_or_default()
+    }
+
+    /// Adds accesses to the innermost frame.
+    fn extend_frame(&mut self, accesses: impl IntoIterator<Item = Access>) {
+        if let Some(frame) = self.frames.last_mut() {
+            frame.extend(accesses);
+        }
+    }
+}

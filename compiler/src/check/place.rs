@@ -1,0 +1,354 @@
+//! Elements: names, subscripts, record fields and slices, as values and as targets of
+//! assignment, input and reference abbreviation. Each records the access it makes.
+
+use occ_grammar::ast::{self, BinOp, Expr, ExprKind};
+
+use super::Checker;
+use super::decl::{direction, kind_name, with_direction};
+use crate::checked::SymbolKind;
+use crate::consteval::Value;
+use crate::diagnostic::DiagnosticKind;
+use crate::types::Type;
+use crate::usage::{Access, Lin, Mode, Part};
+
+/// An element after checking.
+#[derive(Debug, Clone)]
+pub(super) struct Placed {
+    /// Its type.
+    pub ty: Type,
+    /// The storage it denotes, if it is storage.
+    pub target: Option<Access>,
+    /// Whether it may be assigned.
+    pub assignable: bool,
+    /// Its value, when it is a constant.
+    pub value: Option<Value>,
+}
+
+impl Placed {
+    fn error() -> Placed {
+        Placed {
+            ty: Type::Error,
+            target: None,
+            assignable: true,
+            value: None,
+        }
+    }
+}
+
+/// Reports whether an expression is an element (something that may be a variable).
+pub(super) fn is_element(e: &Expr) -> bool {
+    match &e.kind {
+        ExprKind::Name(_) => true,
+        ExprKind::Subscript { base, .. } | ExprKind::Slice { base, .. } => is_element(base),
+        ExprKind::Directed { chan, .. } => is_element(chan),
+        _ => false,
+    }
+}
+
+impl Checker {
+    /// Checks an element; records an access of `mode` to it unless `mode` is `None`.
+    pub(super) fn place(&mut self, e: &Expr, mode: Option<Mode>) -> Placed {
+        let p = match &e.kind {
+            ExprKind::Name(name) => self.place_name(name, mode),
+            ExprKind::Subscript { base, index } => self.place_subscript(base, index, mode, e.span),
+            ExprKind::Slice { base, from, count } => {
+                self.place_slice(base, from.as_deref(), count.as_deref(), mode, e.span)
+            }
+            ExprKind::Directed { chan, dir } => {
+                let p = self.place(chan, mode);
+                Placed {
+                    ty: with_direction(p.ty, direction(Some(*dir))),
+                    ..p
+                }
+            }
+            _ => {
+                let t = self.expr(e, None);
+                return Placed {
+                    ty: t.ty,
+                    target: None,
+                    assignable: false,
+                    value: t.value,
+                };
+            }
+        };
+        self.out.expr_types.insert(e.span, p.ty.clone());
+        p
+    }
+
+    fn place_name(&mut self, name: &ast::Name, mode: Option<Mode>) -> Placed {
+        let Some(id) = self.lookup(name) else {
+            return Placed::error();
+        };
+        let sym = self.sym(id);
+        let (ty, assignable) = (sym.ty.clone(), sym.assignable);
+        match &sym.kind {
+            SymbolKind::Val { value } => {
+                let value = value.clone();
+                let target = Some(Access {
+                    symbol: id,
+                    mode: Mode::Read,
+                    part: Part::Whole,
+                    span: name.span,
+                });
+                Placed {
+                    ty,
+                    target,
+                    assignable: false,
+                    value,
+                }
+            }
+            SymbolKind::Replicator => Placed {
+                ty,
+                target: None,
+                assignable: false,
+                value: None,
+            },
+            SymbolKind::Variable | SymbolKind::Abbrev { .. } | SymbolKind::Param { .. } => {
+                let access = Access {
+                    symbol: id,
+                    mode: mode.unwrap_or(Mode::Read),
+                    part: Part::Whole,
+                    span: name.span,
+                };
+                if let Some(m) = mode {
+                    self.record(id, m, Part::Whole, name.span);
+                }
+                Placed {
+                    ty,
+                    target: Some(access),
+                    assignable,
+                    value: None,
+                }
+            }
+            other => {
+                let found = kind_name(other);
+                let kind = DiagnosticKind::WrongKind {
+                    name: name.text.clone(),
+                    expected: "a variable or value",
+                    found,
+                };
+                self.error(kind, name.span);
+                Placed::error()
+            }
+        }
+    }
+
+    fn place_subscript(
+        &mut self,
+        base: &Expr,
+        index: &Expr,
+        mode: Option<Mode>,
+        span: ast::Span,
+    ) -> Placed {
+        let b = self.place(base, None);
+        if let (Some(fields), ExprKind::Name(field)) =
+            (self.out.types.record_fields(&b.ty), &index.kind)
+        {
+            let found = fields.iter().position(|(n, _)| *n == field.text);
+            let Some(i) = found else {
+                let record = self.out.types.display(&b.ty);
+                self.error(
+                    DiagnosticKind::NoSuchField {
+                        field: field.text.clone(),
+                        record,
+                    },
+                    field.span,
+                );
+                return Placed::error();
+            };
+            let ty = fields.get(i).map_or(Type::Error, |(_, t)| t.clone());
+            let value = match &b.value {
+                Some(Value::Record(vs)) => vs.get(i).cloned(),
+                _ => None,
+            };
+            let part = Part::Range {
+                start: Lin::constant(i as i64),
+                len: 1,
+            };
+            return self.finish_part(b, ty, part, value, mode, span);
+        }
+        let it = self.expr(index, Some(&Type::INT));
+        self.expect_integer_index(&it.ty, index.span);
+        let idx = it.value.as_ref().and_then(Value::as_int);
+        let (len, elem) = match self.out.types.underlying(&b.ty) {
+            Type::Array(n, e) => (*n, (**e).clone()),
+            Type::Error => (None, Type::Error),
+            other => {
+                let ty = self.out.types.display(other);
+                self.error(
+                    DiagnosticKind::BadOperand {
+                        op: "subscript",
+                        ty,
+                    },
+                    base.span,
+                );
+                return Placed::error();
+            }
+        };
+        if let (Some(i), Some(n)) = (idx, len)
+            && (i < 0 || i >= i64::from(n))
+        {
+            self.error(DiagnosticKind::OutOfBounds { index: i, len: n }, index.span);
+        }
+        let value = match (&b.value, idx) {
+            (Some(Value::Array(vs)), Some(i)) => {
+                usize::try_from(i).ok().and_then(|i| vs.get(i).cloned())
+            }
+            _ => None,
+        };
+        let part = match self.linear(index) {
+            Some(start) => Part::Range { start, len: 1 },
+            None => Part::Whole,
+        };
+        self.finish_part(b, elem, part, value, mode, span)
+    }
+
+    fn expect_integer_index(&mut self, ty: &Type, span: ast::Span) {
+        if !matches!(self.out.types.prim(ty), Some(p) if p.is_integer()) && !ty.is_error() {
+            self.expect_type(&Type::INT, ty, span);
+        }
+    }
+
+    /// Narrows the base's target to `part` (first level only) and records the access.
+    fn finish_part(
+        &mut self,
+        b: Placed,
+        ty: Type,
+        part: Part,
+        value: Option<Value>,
+        mode: Option<Mode>,
+        span: ast::Span,
+    ) -> Placed {
+        let target = b.target.map(|t| Access {
+            part: if t.part == Part::Whole { part } else { t.part },
+            span,
+            ..t
+        });
+        if let (Some(m), Some(t)) = (mode, target) {
+            self.record(t.symbol, m, t.part, span);
+        }
+        Placed {
+            ty,
+            target,
+            assignable: b.assignable,
+            value,
+        }
+    }
+
+    fn place_slice(
+        &mut self,
+        base: &Expr,
+        from: Option<&Expr>,
+        count: Option<&Expr>,
+        mode: Option<Mode>,
+        span: ast::Span,
+    ) -> Placed {
+        let b = self.place(base, None);
+        let int = |c: &mut Checker, e: Option<&Expr>| {
+            e.map(|e| {
+                let t = c.expr(e, Some(&Type::INT));
+                c.expect_integer_index(&t.ty, e.span);
+                t.value.as_ref().and_then(Value::as_int)
+            })
+        };
+        let from_v = int(self, from);
+        let count_v = int(self, count);
+        let (len, elem) = match self.out.types.underlying(&b.ty) {
+            Type::Array(n, e) => (*n, (**e).clone()),
+            Type::Error => (None, Type::Error),
+            other => {
+                let ty = self.out.types.display(other);
+                self.error(DiagnosticKind::BadOperand { op: "slice", ty }, base.span);
+                return Placed::error();
+            }
+        };
+        let start = from_v.unwrap_or(Some(0));
+        let n = match count_v {
+            Some(c) => c,
+            None => start.zip(len).map(|(s, l)| i64::from(l) - s),
+        };
+        if let (Some(s), Some(c), Some(l)) = (start, n, len)
+            && (s < 0 || c < 0 || s + c > i64::from(l))
+        {
+            self.error(
+                DiagnosticKind::OutOfBounds {
+                    index: s + c,
+                    len: l,
+                },
+                span,
+            );
+        }
+        let ty = Type::array(n.and_then(|c| u32::try_from(c).ok()), elem);
+        let start_lin = match from {
+            Some(f) => self.linear(f),
+            None => Some(Lin::constant(0)),
+        };
+        let part = match (start_lin, n) {
+            (Some(start), Some(len)) => Part::Range { start, len },
+            _ => Part::Whole,
+        };
+        let value = match (&b.value, start, n) {
+            (Some(Value::Array(vs)), Some(s), Some(c)) => {
+                let (s, c) = (usize::try_from(s).ok(), usize::try_from(c).ok());
+                s.zip(c)
+                    .and_then(|(s, c)| vs.get(s..s + c))
+                    .map(|v| Value::Array(v.to_vec()))
+            }
+            _ => None,
+        };
+        self.finish_part(b, ty, part, value, mode, span)
+    }
+
+    /// Returns a subscript as a linear function of at most one replicator index, when it is one.
+    /// Relies on constants already folded for the subexpressions.
+    pub(super) fn linear(&self, e: &Expr) -> Option<Lin> {
+        if let Some(v) = self.out.constants.get(&e.span).and_then(Value::as_int) {
+            return Some(Lin::constant(v));
+        }
+        match &e.kind {
+            ExprKind::Name(n) => {
+                let id = *self.out.names.get(&n.span)?;
+                matches!(self.sym(id).kind, SymbolKind::Replicator).then_some(Lin {
+                    var: Some(id),
+                    a: 1,
+                    b: 0,
+                })
+            }
+            ExprKind::Binary { op, lhs, rhs } => {
+                let (l, r) = (self.linear(lhs)?, self.linear(rhs)?);
+                combine(*op, l, r)
+            }
+            _ => None,
+        }
+    }
+}
+
+fn combine(op: BinOp, l: Lin, r: Lin) -> Option<Lin> {
+    let var = match (l.var, r.var) {
+        (Some(a), Some(b)) if a != b => return None,
+        (a, b) => a.or(b),
+    };
+    match op {
+        BinOp::Add | BinOp::Plus => Some(Lin {
+            var,
+            a: l.a.checked_add(r.a)?,
+            b: l.b.checked_add(r.b)?,
+        }),
+        BinOp::Sub | BinOp::Minus => Some(Lin {
+            var,
+            a: l.a.checked_sub(r.a)?,
+            b: l.b.checked_sub(r.b)?,
+        }),
+        BinOp::Mul | BinOp::Times if r.var.is_none() => Some(Lin {
+            var,
+            a: l.a.checked_mul(r.b)?,
+            b: l.b.checked_mul(r.b)?,
+        }),
+        BinOp::Mul | BinOp::Times if l.var.is_none() => Some(Lin {
+            var,
+            a: r.a.checked_mul(l.b)?,
+            b: r.b.checked_mul(l.b)?,
+        }),
+        _ => None,
+    }
+}

@@ -1,0 +1,333 @@
+//! Processes, including the PAR usage checks.
+
+use occ_grammar::ast::{self, Expr, ExprKind, Process, ProcessKind};
+
+use super::Checker;
+use crate::consteval::Value;
+use crate::diagnostic::{Diagnostic, DiagnosticKind};
+use crate::types::Type;
+use crate::usage::{self, Access, Conflict, Mode, Part};
+
+/// The name at the root of an element (`a` in `a[i][j]`), for messages.
+pub(super) fn element_name(e: &Expr) -> String {
+    match &e.kind {
+        ExprKind::Name(n) => n.text.clone(),
+        ExprKind::Subscript { base, .. } | ExprKind::Slice { base, .. } => element_name(base),
+        ExprKind::Directed { chan, .. } => element_name(chan),
+        _ => "this expression".into(),
+    }
+}
+
+impl Checker {
+    /// Checks a process.
+    pub(super) fn process(&mut self, p: &Process) {
+        match &p.kind {
+            ProcessKind::Skip | ProcessKind::Stop | ProcessKind::Asm(_) => {}
+            ProcessKind::Scope { decls, body } => {
+                let mark = self.open_scope();
+                self.decls(decls);
+                self.process(body);
+                self.close_scope(mark);
+            }
+            ProcessKind::Assign { lhs, rhs } => self.assign(lhs, rhs, p.span),
+            ProcessKind::Output { chan, items } => self.output(chan, items, p.span),
+            ProcessKind::Input { chan, items } => self.input(chan, items, p.span),
+            ProcessKind::CaseInput { chan, variants } => self.case_input(chan, variants),
+            ProcessKind::Delay { timer, time } => self.delay(timer, time),
+            ProcessKind::Seq { repl, body } => {
+                let mark = self.open_scope();
+                if let Some(r) = repl {
+                    self.replicator(r);
+                }
+                body.iter().for_each(|b| self.process(b));
+                self.close_scope(mark);
+            }
+            ProcessKind::Par { repl, body, .. } => self.par(repl.as_deref(), body),
+            ProcessKind::Processor { number, body } => {
+                self.condition(number, &Type::INT);
+                self.process(body);
+            }
+            ProcessKind::If { repl, choices } => self.if_(repl.as_deref(), choices),
+            ProcessKind::Alt(alt) => self.alt(alt),
+            ProcessKind::Case { selector, options } => self.case(selector, options),
+            ProcessKind::While { cond, body } => {
+                self.condition(cond, &Type::BOOL);
+                self.process(body);
+            }
+            ProcessKind::Call { name, args } => self.proc_call(name, args, p.span),
+        }
+    }
+
+    /// Checks an expression that must have type `ty`.
+    fn condition(&mut self, e: &Expr, ty: &Type) {
+        let t = self.expr(e, Some(ty));
+        self.expect_type(ty, &t.ty, e.span);
+    }
+
+    fn delay(&mut self, timer: &Expr, time: &Expr) {
+        let p = self.place(timer, Some(Mode::Input));
+        if !matches!(p.ty, Type::Timer | Type::Error) {
+            let found = self.out.types.display(&p.ty);
+            self.error(
+                DiagnosticKind::TypeMismatch {
+                    expected: "TIMER".into(),
+                    found,
+                },
+                timer.span,
+            );
+        }
+        self.condition(time, &Type::INT);
+    }
+
+    fn assign(&mut self, lhs: &[Expr], rhs: &[Expr], span: ast::Span) {
+        if let ([_, _, ..], [single]) = (lhs, rhs)
+            && let Some(tys) = self.multi_result(single, lhs)
+        {
+            if tys.len() != lhs.len() {
+                self.error(
+                    DiagnosticKind::ValueCount {
+                        expected: lhs.len(),
+                        found: tys.len(),
+                    },
+                    single.span,
+                );
+            }
+            for (target, ty) in lhs.iter().zip(tys) {
+                let p = self.target(target);
+                self.expect_type(&p, &ty, target.span);
+            }
+            return;
+        }
+        if lhs.len() != rhs.len() {
+            self.error(
+                DiagnosticKind::ValueCount {
+                    expected: lhs.len(),
+                    found: rhs.len(),
+                },
+                span,
+            );
+        }
+        let targets: Vec<Type> = lhs.iter().map(|t| self.target(t)).collect();
+        for (i, e) in rhs.iter().enumerate() {
+            let want = targets.get(i);
+            let t = self.expr(e, want);
+            if let Some(w) = want {
+                self.expect_type(w, &t.ty, e.span);
+            }
+        }
+    }
+
+    /// The result types of a multi-result FUNCTION call or VALOF on the right of `a, b := ...`.
+    fn multi_result(&mut self, e: &Expr, lhs: &[Expr]) -> Option<Vec<Type>> {
+        match &e.kind {
+            ExprKind::Call { name, args } => {
+                let is_type = self.scope.lookup(&name.text).is_some_and(|id| {
+                    matches!(self.sym(id).kind, crate::checked::SymbolKind::DataType(_))
+                });
+                if is_type {
+                    return None;
+                }
+                Some(
+                    self.call_function(name, args, e.span)
+                        .unwrap_or_else(|| vec![Type::Error; lhs.len()]),
+                )
+            }
+            ExprKind::Valof(v) => Some(self.valof_types(v, &[])),
+            _ => None,
+        }
+    }
+
+    /// Checks an assignment target and returns its type.
+    fn target(&mut self, e: &Expr) -> Type {
+        let p = self.place(e, Some(Mode::Write));
+        if !p.assignable && !p.ty.is_error() {
+            self.error(
+                DiagnosticKind::NotAssignable {
+                    name: element_name(e),
+                },
+                e.span,
+            );
+        }
+        p.ty
+    }
+
+    fn if_(&mut self, repl: Option<&ast::Replicator>, choices: &[ast::Choice]) {
+        let mark = self.open_scope();
+        if let Some(r) = repl {
+            self.replicator(r);
+        }
+        for c in choices {
+            let inner = self.open_scope();
+            self.decls(&c.decls);
+            match &c.kind {
+                ast::ChoiceKind::Guarded { cond, body } => {
+                    self.condition(cond, &Type::BOOL);
+                    self.process(body);
+                }
+                ast::ChoiceKind::Nested(p) => self.process(p),
+            }
+            self.close_scope(inner);
+        }
+        self.close_scope(mark);
+    }
+
+    fn alt(&mut self, alt: &ast::Alt) {
+        let mark = self.open_scope();
+        if let Some(r) = &alt.repl {
+            self.replicator(r);
+        }
+        for a in &alt.alternatives {
+            let inner = self.open_scope();
+            self.decls(&a.decls);
+            match &a.kind {
+                ast::AltKind::Guarded { cond, guard, body } => {
+                    if let Some(c) = cond {
+                        self.condition(c, &Type::BOOL);
+                    }
+                    self.process(guard);
+                    self.process(body);
+                }
+                ast::AltKind::CaseInput {
+                    cond,
+                    chan,
+                    variants,
+                } => {
+                    if let Some(c) = cond {
+                        self.condition(c, &Type::BOOL);
+                    }
+                    self.case_input(chan, variants);
+                }
+                ast::AltKind::Nested(inner_alt) => self.alt(inner_alt),
+            }
+            self.close_scope(inner);
+        }
+        self.close_scope(mark);
+    }
+
+    fn case(&mut self, selector: &Expr, options: &[ast::CaseOption]) {
+        let t = self.expr(selector, None);
+        let ok = self
+            .out
+            .types
+            .prim(&t.ty)
+            .is_some_and(|p| p.is_integer() || p == crate::types::Prim::Bool);
+        if !ok && !t.ty.is_error() {
+            let ty = self.out.types.display(&t.ty);
+            self.error(DiagnosticKind::BadOperand { op: "CASE", ty }, selector.span);
+        }
+        let mut seen: Vec<Value> = Vec::new();
+        for o in options {
+            let mark = self.open_scope();
+            self.decls(&o.decls);
+            for v in o.values.iter().flatten() {
+                let vt = self.expr(v, Some(&t.ty));
+                self.expect_type(&t.ty, &vt.ty, v.span);
+                match vt.value {
+                    Some(val) if seen.contains(&val) => {
+                        let value = self
+                            .out
+                            .constants
+                            .get(&v.span)
+                            .map_or_else(String::new, show);
+                        self.error(DiagnosticKind::DuplicateOption { value }, v.span);
+                    }
+                    Some(val) => seen.push(val),
+                    None if !vt.ty.is_error() => self.error(
+                        DiagnosticKind::NotConstant {
+                            context: "a CASE option",
+                        },
+                        v.span,
+                    ),
+                    None => {}
+                }
+            }
+            self.process(&o.body);
+            self.close_scope(mark);
+        }
+    }
+
+    /// Checks a PAR: each branch separately, then every pair of branches (and, for a
+    /// replicated PAR, every pair of instances) against the usage rules.
+    fn par(&mut self, repl: Option<&ast::Replicator>, body: &[Process]) {
+        let first = self.next_symbol();
+        let mark = self.open_scope();
+        let r = repl.map(|r| self.replicator(r));
+        let mut branches: Vec<Vec<Access>> = Vec::with_capacity(body.len());
+        for p in body {
+            self.push_frame();
+            self.process(p);
+            let mut accesses = self.pop_frame();
+            accesses.retain(|a| a.symbol < first);
+            usage::dedup(&mut accesses);
+            branches.push(accesses);
+        }
+        let mut found = Vec::new();
+        for (j, later) in branches.iter().enumerate() {
+            for earlier in branches.iter().take(j) {
+                found.extend(usage::conflicts(earlier, later, None, &|s| self.exempt(s)));
+            }
+            if let Some(r) = &r {
+                let values = r.values(4096);
+                let across = Some((r.id, values.as_deref()));
+                found.extend(usage::conflicts(later, later, across, &|s| self.exempt(s)));
+            }
+        }
+        self.report_conflicts(&found);
+        self.close_scope(mark);
+        let index = r.map(|r| r.id);
+        for branch in branches {
+            self.extend_frame(branch.into_iter().map(|mut a| {
+                if matches!(a.part, Part::Range { start, .. } if start.var.is_some() && start.var == index) {
+                    a.part = Part::Whole;
+                }
+                a
+            }));
+        }
+    }
+
+    /// Reports whether a symbol is exempt from the PAR rules: timers and `#PRAGMA SHARED` names.
+    fn exempt(&self, s: crate::checked::SymbolId) -> bool {
+        let sym = self.sym(s);
+        let mut ty = &sym.ty;
+        while let Type::Array(_, e) = ty {
+            ty = e;
+        }
+        matches!(ty, Type::Timer) || self.shared.contains(&sym.name)
+    }
+
+    fn report_conflicts(&mut self, found: &[Conflict]) {
+        let mut reported: Vec<crate::checked::SymbolId> = Vec::new();
+        for c in found {
+            if reported.contains(&c.here.symbol) {
+                continue;
+            }
+            reported.push(c.here.symbol);
+            let name = self.sym(c.here.symbol).name.clone();
+            let kind = match c.here.mode {
+                Mode::Input => DiagnosticKind::ParChannel {
+                    name,
+                    used_for: "input",
+                },
+                Mode::Output => DiagnosticKind::ParChannel {
+                    name,
+                    used_for: "output",
+                },
+                _ => DiagnosticKind::ParUsage { name },
+            };
+            let d = Diagnostic::error(kind, c.here.span)
+                .with_related(c.other.span, "and in this branch");
+            self.diags.push(d);
+        }
+    }
+}
+
+/// Renders a constant for messages.
+fn show(v: &Value) -> String {
+    match v {
+        Value::Bool(b) => if *b { "TRUE" } else { "FALSE" }.into(),
+        Value::Int(i) => i.to_string(),
+        Value::Real32(x) => x.to_string(),
+        Value::Real64(x) => x.to_string(),
+        Value::Array(_) | Value::Record(_) => "(table)".into(),
+    }
+}

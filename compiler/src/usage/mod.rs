@@ -1,0 +1,186 @@
+//! Usage rules for PAR, in the style of occ21's `use1.c`-`use5.c`.
+//!
+//! While the checker walks a process it records every [`Access`] to a symbol: read, written,
+//! input or output, with the part of the symbol touched ([`Part`]). For each PAR it collects the
+//! accesses of each branch separately and compares every pair of branches:
+//! - a variable written in one branch may not be read or written in another;
+//! - a channel may be used for input in at most one branch, and for output in at most one;
+//! - timers are exempt; names given in `#PRAGMA SHARED` are exempt.
+//!
+//! Parts are compared exactly when subscripts are constant, and also when they are the same
+//! linear function `a*i + b` of a replicator index `i` (so `a[i]` and `a[i+1]` in one replicated
+//! SEQ iteration are disjoint). For a replicated PAR, two different instances of the body are
+//! compared with the PAR's own index taking different values: with a constant count every pair of
+//! index values is tried; otherwise `a*i + b` and `a*j + b` (same `a`, `b`, `a != 0`) are disjoint.
+
+#[cfg(test)]
+mod test;
+
+use occ_grammar::ast::Span;
+
+use crate::checked::SymbolId;
+
+/// How a symbol is accessed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Mode {
+    /// Its value is used.
+    Read,
+    /// It is assigned or input to.
+    Write,
+    /// A channel is input from.
+    Input,
+    /// A channel is output to.
+    Output,
+}
+
+/// A linear function `a*var + b` of a replicator index, or a constant when `var` is `None`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Lin {
+    /// The replicator index, if any.
+    pub var: Option<SymbolId>,
+    /// The coefficient of `var`.
+    pub a: i64,
+    /// The constant term.
+    pub b: i64,
+}
+
+impl Lin {
+    /// A constant.
+    pub fn constant(b: i64) -> Lin {
+        Lin { var: None, a: 0, b }
+    }
+
+    /// Evaluates with `var` set to `value` (if this is a function of `index`).
+    fn at(self, index: SymbolId, value: i64) -> Lin {
+        if self.var == Some(index) {
+            Lin::constant(self.a.saturating_mul(value).saturating_add(self.b))
+        } else {
+            self
+        }
+    }
+}
+
+/// Which part of a symbol an access touches (first dimension or record field only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Part {
+    /// All of it (or an element whose subscript is not known).
+    Whole,
+    /// Elements (or record fields) `start .. start + len`.
+    Range {
+        /// The first element.
+        start: Lin,
+        /// How many elements.
+        len: i64,
+    },
+}
+
+/// One access to a symbol.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Access {
+    /// The symbol (after following reference abbreviations).
+    pub symbol: SymbolId,
+    /// How.
+    pub mode: Mode,
+    /// Which part.
+    pub part: Part,
+    /// Where (for the diagnostic).
+    pub span: Span,
+}
+
+/// Reports whether two parts may overlap, with both evaluated in the same instance.
+pub fn may_overlap(p: Part, q: Part) -> bool {
+    match (p, q) {
+        // Same function of the same index: compare the constant offsets.
+        (Part::Range { start: s, len: n }, Part::Range { start: t, len: m })
+            if s.var == t.var && s.a == t.a =>
+        {
+            s.b < t.b.saturating_add(m) && t.b < s.b.saturating_add(n)
+        }
+        _ => true,
+    }
+}
+
+/// Reports whether `p` in one instance and `q` in another instance of a replicated PAR over
+/// `index` may overlap. `values` are the index values when the count is a (small) constant.
+pub fn may_overlap_across(p: Part, q: Part, index: SymbolId, values: Option<&[i64]>) -> bool {
+    let (Part::Range { start: s, len: n }, Part::Range { start: t, len: m }) = (p, q) else {
+        return true;
+    };
+    if s.var != Some(index) && t.var != Some(index) {
+        return may_overlap(p, q);
+    }
+    match values {
+        Some(vals) => vals.iter().enumerate().any(|(k, &i)| {
+            vals.iter().enumerate().any(|(l, &j)| {
+                k != l
+                    && may_overlap(
+                        Part::Range {
+                            start: s.at(index, i),
+                            len: n,
+                        },
+                        Part::Range {
+                            start: t.at(index, j),
+                            len: m,
+                        },
+                    )
+            })
+        }),
+        None => !(s.var == t.var && s.a == t.a && s.a != 0 && s.b == t.b && n == 1 && m == 1),
+    }
+}
+
+/// A conflict found between two branches of a PAR.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Conflict {
+    /// The access in the later branch (the one reported).
+    pub here: Access,
+    /// The conflicting access in the earlier branch.
+    pub other: Access,
+}
+
+/// Reports whether access modes in two branches conflict.
+fn modes_conflict(a: Mode, b: Mode) -> bool {
+    use Mode::*;
+    matches!(
+        (a, b),
+        (Write, Write) | (Write, Read) | (Read, Write) | (Input, Input) | (Output, Output)
+    )
+}
+
+/// Compares two branches' accesses; `across` gives the replicated PAR's index and values when
+/// the two sets are two instances of one replicated body. Returns at most one conflict per
+/// symbol.
+pub fn conflicts(
+    first: &[Access],
+    second: &[Access],
+    across: Option<(SymbolId, Option<&[i64]>)>,
+    exempt: &dyn Fn(SymbolId) -> bool,
+) -> Vec<Conflict> {
+    let mut found: Vec<Conflict> = Vec::new();
+    for b in second {
+        if exempt(b.symbol) || found.iter().any(|c| c.here.symbol == b.symbol) {
+            continue;
+        }
+        let hit = first.iter().find(|a| {
+            a.symbol == b.symbol
+                && modes_conflict(a.mode, b.mode)
+                && match across {
+                    Some((index, values)) => may_overlap_across(a.part, b.part, index, values),
+                    None => may_overlap(a.part, b.part),
+                }
+        });
+        if let Some(a) = hit {
+            found.push(Conflict {
+                here: *b,
+                other: *a,
+            });
+        }
+    }
+    found
+}
+
+/// Removes repeated accesses (same symbol, mode and part), keeping the first.
+pub fn dedup(accesses: &mut Vec<Access>) {
+    let mut seen = std::collections::HashSet::new();
+    accesses.retain(|a| seen.insert((a.symbol, a.mode, a.part)));
+}
