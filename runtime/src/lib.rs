@@ -1,2 +1,85 @@
 //! The process machine: T800-style workspaces, run queues, one-word channels, ALT, timers, PAR,
 //! runtime errors and deadlock detection; nodes, links and network transports.
+//!
+//! Compiled occam (from `occ-codegen`) is a set of [`abi::ProcFn`]s that call the entry points of
+//! [`abi::ABI_TABLE`]; [`abi`] states the whole contract. A [`Node`] runs them: its scheduler
+//! ([`sched`]), channels ([`chan`]), ALT ([`alt`]), timers ([`timer`]), PAR ([`par`]), errors
+//! ([`error`]) and deadlock reports ([`deadlock`]). Nodes own all their state, so many run in one
+//! OS process; [`Network`] joins them with links.
+//!
+//! # Example
+//!
+//! A process written by hand in the shape codegen emits: it outputs one byte on `screen`.
+//!
+//! ```
+//! use occ_runtime::abi::{slot, Status, Word, Wptr};
+//! use occ_runtime::{chan::rt_out, HostIo, Node, NodeConfig, ProgramInfo};
+//! use std::sync::{Arc, Mutex};
+//!
+//! // locals: [0] = screen channel address, [1] = the byte to send
+//! unsafe extern "C" fn hello(ws: Wptr, node: *mut Node) -> Status {
+//!     unsafe {
+//!         match *ws.offset(slot::IPTR) {
+//!             0 => {
+//!                 *ws.add(1) = b'!' as Word;
+//!                 *ws.offset(slot::IPTR) = 1; // after-op index
+//!                 let st = rt_out(node, ws, *ws as *mut Word, ws.add(1).cast(), 1);
+//!                 if st != Status::DONE { return st; }
+//!                 Status::DONE
+//!             }
+//!             _ => Status::DONE,
+//!         }
+//!     }
+//! }
+//!
+//! #[derive(Clone, Default)]
+//! struct Buf(Arc<Mutex<Vec<u8>>>);
+//! impl std::io::Write for Buf {
+//!     fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+//!         self.0.lock().unwrap().extend_from_slice(b);
+//!         Ok(b.len())
+//!     }
+//!     fn flush(&mut self) -> std::io::Result<()> { Ok(()) }
+//! }
+//!
+//! let out = Buf::default();
+//! let host = HostIo::new(Box::new(std::io::empty()), Box::new(out.clone()), Box::new(std::io::sink()));
+//! let mut node = Node::new(NodeConfig::default(), Arc::new(ProgramInfo::default()), host);
+//! let [_, screen, _] = node.host_channels();
+//! let ws = node.alloc_workspace(2).unwrap();
+//! unsafe {
+//!     *ws = screen as Word;
+//!     node.spawn(ws, hello);
+//! }
+//! node.run().unwrap();
+//! assert_eq!(out.0.lock().unwrap().as_slice(), b"!");
+//! ```
+
+#![deny(missing_docs)]
+
+pub mod abi;
+pub mod alt;
+mod arena;
+pub mod chan;
+pub mod deadlock;
+pub mod error;
+mod external;
+mod frame;
+pub mod host;
+pub mod intrinsic;
+pub mod link;
+pub mod node;
+pub mod par;
+pub mod program;
+pub mod sched;
+pub mod stats;
+mod ticker;
+pub mod timer;
+
+pub use deadlock::{BlockedProcess, DeadlockReport, WaitsOn};
+pub use error::{ErrorKind, Halt, RunError};
+pub use host::HostIo;
+pub use link::Network;
+pub use node::{Node, NodeConfig};
+pub use program::{ChannelName, ProcInfo, ProgramInfo, SourceLoc};
+pub use stats::Stats;

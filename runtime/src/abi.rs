@@ -1,0 +1,315 @@
+//! The contract between compiled occam code and the runtime.
+//!
+//! Everything codegen needs is in this module: the word type, the status codes, the workspace slot
+//! layout, the constants stored in slots and channel words, the signature of a compiled PROC, the
+//! frame-chain protocol and the [`ABI_TABLE`] of runtime entry points.
+//!
+//! # Compiled code
+//!
+//! Each PROC (and each PAR branch) compiles to a [`ProcFn`]:
+//! `extern "C" fn(ws: *mut Word, node: *mut Node) -> Status`. `ws` is the frame's workspace pointer
+//! (Wptr); its locals live at non-negative word offsets chosen by the compiler, the runtime's
+//! [`slot`]s at negative offsets. Every workspace must reserve [`slot::HEADER_WORDS`] words below
+//! Wptr. The function starts by loading `ws[slot::IPTR]` and dispatching on it (`br_table`):
+//! index 0 is the entry, every other index a resume point.
+//!
+//! # Blocking points (the one rule)
+//!
+//! Before calling any entry that returns a [`Status`], compiled code stores into `ws[slot::IPTR]`
+//! the resume index of the code that follows the call ("after-op" index). If the entry returns a
+//! non-zero status, the function returns that status at once, without touching the workspace
+//! again. All values live across a blocking point must be in the workspace. When the process is
+//! resumed, the runtime calls the frame's `ws[slot::CODE]` with the same `ws`, and the function
+//! dispatches to the after-op index. Data has already been moved: the second party to a
+//! communication copies, so after `rt_in` resumes, the input variable holds the value.
+//!
+//! # Timeslicing poll
+//!
+//! At every loop back-edge compiled code loads the `u32` at `node + YIELD_FLAG_OFFSET`; if it is
+//! non-zero it stores the resume index of the loop head into `ws[slot::IPTR]` and calls
+//! `rt_timeslice`, returning if the status is non-zero.
+//!
+//! # Frame chain (blocking PROC calls)
+//!
+//! A PROC call gives the callee a workspace inside the caller's: `callee = ws + k` words, `k` a
+//! static offset such that the callee's header and locals fit inside the caller's frame. The
+//! caller then, in this order:
+//! 1. stores `callee[CODE] = callee fn`, `callee[IPTR] = 0`, `callee[CALLER] = ws`,
+//!    `callee[ROOT] = ws[ROOT]`, and the parameters in the callee's locals;
+//! 2. stores its own after-call index in `ws[IPTR]`;
+//! 3. calls the callee natively; if the result is non-zero it returns it at once.
+//!
+//! Only the innermost frame ever sits on a channel, queue or timer, so resuming is O(1): the
+//! runtime calls the innermost frame. When a resumed frame returns [`Status::DONE`] and its
+//! `CALLER` is not null, the runtime calls the caller's `CODE` with the caller's workspace, which
+//! dispatches to its after-call index (the `ret` of the T800). A frame whose `CALLER` is null is a
+//! process root: `DONE` ends the process.
+//!
+//! # PAR
+//!
+//! A PAR of n branches uses a [`join`] block of two words inside the parent's workspace, and n
+//! sub-workspaces for the branches. The parent stores `join[PARENT] = 0`, `join[COUNT] = n`, calls
+//! `rt_startp` (or `rt_startp_pri` for PRI PAR) once per branch, each branch getting a branch
+//! function and the join address in one of its own locals, then stores its after-PAR index and
+//! calls `rt_par_wait`. Each branch ends with `return rt_endp(node, ws, join)`. The last branch to
+//! end hands the processor straight to the parent (as the T800's `endp`).
+//!
+//! # ALT
+//!
+//! `rt_alt` (or `rt_talt` with timer guards); one `rt_enbc`/`rt_enbs`/`rt_enbt` per guard;
+//! `rt_altwt` (or `rt_taltwt`, blocking point); one `rt_disc`/`rt_diss`/`rt_dist` per guard in
+//! priority order (PRI ALT: textual order), each with the guard's branch number; then `rt_altend`
+//! returns the selected branch number, on which the code switches. The selected channel branch
+//! then performs an ordinary `rt_in`. Every guard enabled must be disabled.
+
+use crate::node::Node;
+
+/// One workspace word: 8 bytes, holding an occam INT, a pointer or a tagged process descriptor.
+pub type Word = i64;
+
+/// A workspace pointer (Wptr): the address of word 0 of a frame.
+pub type Wptr = *mut Word;
+
+/// The signature of every compiled PROC and PAR branch.
+///
+/// # Safety
+/// `ws` must point at word 0 of a workspace with [`slot::HEADER_WORDS`] reserved words below it and
+/// the frame's locals above; `node` must be the node that owns the workspace.
+pub type ProcFn = unsafe extern "C" fn(ws: Wptr, node: *mut Node) -> Status;
+
+/// What a compiled function or a blocking entry reports to its caller.
+///
+/// A transparent `i64`, so it crosses the C ABI unchanged. Compiled code only tests it for zero.
+#[repr(transparent)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Status(pub i64);
+
+impl Status {
+    /// The operation completed; the caller carries on.
+    pub const DONE: Status = Status(0);
+    /// The frame has been descheduled (it sits on a channel, queue, timer or join); return.
+    pub const BLOCKED: Status = Status(1);
+    /// The node has halted on a runtime error; return.
+    pub const HALTED: Status = Status(2);
+}
+
+/// Byte offset, from the `node` pointer, of the `u32` timeslice/preemption flag.
+pub const YIELD_FLAG_OFFSET: i32 = 0;
+
+/// Word offsets, from Wptr, of the runtime's slots in every workspace.
+///
+/// Compatible in spirit with KRoC CCSP (`ccsp_consts.h`): Iptr -1, Link -2, Pointer/State -4,
+/// TLink -5, Time -6; the slots below are this runtime's additions.
+pub mod slot {
+    /// Resume index while descheduled (0 = entry).
+    pub const IPTR: isize = -1;
+    /// Next frame on a run queue.
+    pub const LINK: isize = -2;
+    /// The frame's [`super::ProcFn`].
+    pub const CODE: isize = -3;
+    /// Data pointer while blocked on a channel (alias of [`STATE`]).
+    pub const POINTER: isize = -4;
+    /// ALT state while ALTing: [`super::alt_state`].
+    pub const STATE: isize = -4;
+    /// Next frame on a timer queue, or [`super::time_state`] during a timer ALT.
+    pub const TLINK: isize = -5;
+    /// Time waited for.
+    pub const TIME: isize = -6;
+    /// Calling frame, or 0 for a process root.
+    pub const CALLER: isize = -7;
+    /// The process root frame (itself for a root).
+    pub const ROOT: isize = -8;
+    /// ALT selection (the T800's Temp): the selected branch or [`super::NONE_SELECTED`].
+    pub const SELECT: isize = -9;
+    /// What the frame waits on, for deadlock reports: see [`super::wait`].
+    pub const WAIT: isize = -10;
+    /// Root only: the innermost frame at the process's last blocking point.
+    pub const INNER: isize = -11;
+    /// Root only: previous live process on the node.
+    pub const LIVE_PREV: isize = -12;
+    /// Root only: next live process on the node.
+    pub const LIVE_NEXT: isize = -13;
+    /// Words every workspace reserves below Wptr.
+    pub const HEADER_WORDS: usize = 13;
+}
+
+/// Word offsets inside a PAR join block.
+pub mod join {
+    /// 0 until the parent waits (`rt_par_wait`), then its descriptor (Wptr | priority), resumed
+    /// when the count reaches zero.
+    pub const PARENT: isize = 0;
+    /// Branches still running.
+    pub const COUNT: isize = 1;
+    /// Size of a join block in words.
+    pub const WORDS: usize = 2;
+}
+
+/// An empty channel word, an empty queue link.
+pub const NOT_PROCESS: Word = 0;
+
+/// Priorities, as stored in bit 0 of a process descriptor.
+pub mod priority {
+    use super::Word;
+    /// High priority (PRI PAR first branch); never timesliced.
+    pub const HIGH: Word = 0;
+    /// Low priority, the default; timesliced at loop back-edges.
+    pub const LOW: Word = 1;
+}
+
+/// Tag bits in the low three bits of a channel word (workspaces are 8-byte aligned).
+///
+/// A channel word is 0 (empty); `Wptr | pri` (a process waits with its data pointer in
+/// `POINTER`); `Wptr | TAG_ALT | pri` (an ALTing process has enabled it); or
+/// `endpoint | TAG_EXTERNAL` (a link or host endpoint stands behind the channel).
+pub mod tag {
+    use super::Word;
+    /// Bit 0: the waiting process is low priority.
+    pub const LOW: Word = 1;
+    /// Bit 1: the waiting process is ALTing.
+    pub const ALT: Word = 2;
+    /// Bit 2: the word points at an external endpoint, not a workspace.
+    pub const EXTERNAL: Word = 4;
+    /// All tag bits.
+    pub const MASK: Word = 7;
+}
+
+/// Values of the `STATE` slot while ALTing.
+pub mod alt_state {
+    use super::Word;
+    /// Guards are being enabled.
+    pub const ENABLING: Word = 1;
+    /// Descheduled in `altwt`/`taltwt`.
+    pub const WAITING: Word = 2;
+    /// At least one guard is ready.
+    pub const READY: Word = 3;
+}
+
+/// Values of the `TLINK` slot during a timer ALT (any other value: on a timer queue).
+pub mod time_state {
+    use super::Word;
+    /// An enabled timer guard has set `TIME`.
+    pub const SET: Word = 1;
+    /// No timer guard enabled yet.
+    pub const NOT_SET: Word = 2;
+}
+
+/// The `SELECT` value before any guard has been selected.
+pub const NONE_SELECTED: Word = -1;
+
+/// Values of the `WAIT` slot. A channel address (8-aligned) means blocked on that channel,
+/// `| OUTPUT` when outputting.
+pub mod wait {
+    use super::Word;
+    /// Not blocked.
+    pub const NOTHING: Word = 0;
+    /// Added to a channel address when the frame is outputting.
+    pub const OUTPUT: Word = 1;
+    /// Waiting in an ALT.
+    pub const ALT: Word = 2;
+    /// Waiting on a timer.
+    pub const TIMER: Word = 3;
+    /// Waiting for the branches of a PAR.
+    pub const JOIN: Word = 4;
+    /// Stopped with `rt_stopp`.
+    pub const STOPPED: Word = 5;
+}
+
+/// The machine type of an ABI parameter or result (all are `I64` in Cranelift on x86-64).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AbiType {
+    /// A pointer (node, workspace, channel, data).
+    Ptr,
+    /// A [`Word`] value.
+    Word,
+    /// A [`Status`] result.
+    Status,
+}
+
+/// One runtime entry point that compiled code may call.
+#[derive(Clone, Copy, Debug)]
+pub struct AbiEntry {
+    /// Symbol name (codegen declares an import of this name and registers `addr` under it).
+    pub name: &'static str,
+    /// Parameter types, in order.
+    pub params: &'static [AbiType],
+    /// Result type, if any.
+    pub ret: Option<AbiType>,
+    /// Whether the entry may deschedule: codegen must store the after-op index first.
+    pub blocking: bool,
+    /// The function's address.
+    pub addr: *const u8,
+}
+
+// SAFETY: an AbiEntry only holds static strings and the address of a function, both immutable and
+// valid for the program's lifetime.
+unsafe impl Sync for AbiEntry {}
+
+use AbiType::{Ptr, Status as St, Word as W};
+
+macro_rules! entry {
+    ($f:path, $blocking:expr, [$($p:expr),*], $ret:expr) => {
+        AbiEntry {
+            name: stringify!($f),
+            params: &[$($p),*],
+            ret: $ret,
+            blocking: $blocking,
+            addr: $f as *const u8,
+        }
+    };
+}
+
+use crate::alt::{
+    rt_alt, rt_altend, rt_altwt, rt_disc, rt_diss, rt_dist, rt_enbc, rt_enbs, rt_enbt, rt_talt,
+    rt_taltwt,
+};
+use crate::chan::{rt_in, rt_out};
+use crate::error::rt_error;
+use crate::par::{rt_endp, rt_par_wait, rt_startp, rt_startp_pri, rt_stopp};
+use crate::sched::{rt_reschedule, rt_timeslice};
+use crate::timer::{rt_timer_read, rt_tin};
+
+/// Every runtime entry point, shared by codegen (imports) and the runtime (definitions).
+///
+/// Parameter names by entry (all start with `node`, and `ws` is the calling frame):
+/// - `rt_in(node, ws, chan, data, len) -> Status`, `rt_out(node, ws, chan, data, len) -> Status`
+/// - `rt_startp(node, ws, child, code, entry)`, `rt_startp_pri(node, ws, child, code, entry, pri)`,
+///   `rt_endp(node, ws, join)`, `rt_par_wait(node, ws, join)`, `rt_stopp(node, ws)`
+/// - `rt_timeslice(node, ws)`, `rt_reschedule(node, ws)`
+/// - `rt_timer_read(node) -> Word`, `rt_tin(node, ws, time)`
+/// - `rt_alt(node, ws)`, `rt_talt(node, ws)`, `rt_enbc(node, ws, guard, chan)`,
+///   `rt_enbs(node, ws, guard)`, `rt_enbt(node, ws, guard, time)`, `rt_altwt(node, ws)`,
+///   `rt_taltwt(node, ws)`, `rt_disc(node, ws, guard, chan, branch) -> Word`,
+///   `rt_diss(node, ws, guard, branch) -> Word`, `rt_dist(node, ws, guard, time, branch) -> Word`,
+///   `rt_altend(node, ws) -> Word`
+/// - `rt_error(node, ws, kind, location) -> Status` (kind: [`crate::ErrorKind`] code, location:
+///   index into [`crate::ProgramInfo::locations`])
+pub static ABI_TABLE: &[AbiEntry] = &[
+    entry!(rt_in, true, [Ptr, Ptr, Ptr, Ptr, W], Some(St)),
+    entry!(rt_out, true, [Ptr, Ptr, Ptr, Ptr, W], Some(St)),
+    entry!(rt_startp, true, [Ptr, Ptr, Ptr, Ptr, W], Some(St)),
+    entry!(rt_startp_pri, true, [Ptr, Ptr, Ptr, Ptr, W, W], Some(St)),
+    entry!(rt_endp, true, [Ptr, Ptr, Ptr], Some(St)),
+    entry!(rt_par_wait, true, [Ptr, Ptr, Ptr], Some(St)),
+    entry!(rt_stopp, true, [Ptr, Ptr], Some(St)),
+    entry!(rt_timeslice, true, [Ptr, Ptr], Some(St)),
+    entry!(rt_reschedule, true, [Ptr, Ptr], Some(St)),
+    entry!(rt_timer_read, false, [Ptr], Some(W)),
+    entry!(rt_tin, true, [Ptr, Ptr, W], Some(St)),
+    entry!(rt_alt, false, [Ptr, Ptr], Some(St)),
+    entry!(rt_talt, false, [Ptr, Ptr], Some(St)),
+    entry!(rt_enbc, false, [Ptr, Ptr, W, Ptr], Some(St)),
+    entry!(rt_enbs, false, [Ptr, Ptr, W], Some(St)),
+    entry!(rt_enbt, false, [Ptr, Ptr, W, W], Some(St)),
+    entry!(rt_altwt, true, [Ptr, Ptr], Some(St)),
+    entry!(rt_taltwt, true, [Ptr, Ptr], Some(St)),
+    entry!(rt_disc, false, [Ptr, Ptr, W, Ptr, W], Some(W)),
+    entry!(rt_diss, false, [Ptr, Ptr, W, W], Some(W)),
+    entry!(rt_dist, false, [Ptr, Ptr, W, W, W], Some(W)),
+    entry!(rt_altend, false, [Ptr, Ptr], Some(W)),
+    entry!(rt_error, true, [Ptr, Ptr, W, W], Some(St)),
+];
+
+/// Finds an entry of [`ABI_TABLE`] by name.
+pub fn abi_entry(name: &str) -> Option<&'static AbiEntry> {
+    ABI_TABLE.iter().find(|e| e.name == name)
+}

@@ -1,0 +1,87 @@
+//! Workspace memory: a per-node bump arena with a byte budget and free lists by size.
+//!
+//! Memory comes from the system in zeroed chunks (pages are only touched when used), so a large
+//! budget costs nothing until processes use it.
+
+use std::collections::HashMap;
+
+use crate::abi::{Word, Wptr, slot};
+use crate::error::RunError;
+
+/// Words per chunk requested from the system (8 MB).
+const CHUNK_WORDS: usize = 1 << 20;
+
+/// A node's workspace arena.
+#[derive(Debug)]
+pub(crate) struct Arena {
+    chunks: Vec<Box<[Word]>>,
+    /// Next free word in the last chunk.
+    used: usize,
+    free: HashMap<usize, Vec<Wptr>>,
+    budget: usize,
+    in_use: usize,
+    peak: usize,
+}
+
+impl Arena {
+    pub(crate) fn new(budget: usize) -> Arena {
+        Arena {
+            chunks: Vec::new(),
+            used: 0,
+            free: HashMap::new(),
+            budget,
+            in_use: 0,
+            peak: 0,
+        }
+    }
+
+    /// Allocates `words` words above Wptr plus the header below; returns Wptr.
+    pub(crate) fn alloc(&mut self, words: usize) -> Result<Wptr, RunError> {
+        let total = words.max(1) + slot::HEADER_WORDS;
+        let bytes = total * size_of::<Word>();
+        if self.in_use + bytes > self.budget {
+            return Err(RunError::OutOfMemory {
+                requested: bytes,
+                budget: self.budget,
+            });
+        }
+        self.in_use += bytes;
+        self.peak = self.peak.max(self.in_use);
+        if let Some(ws) = self.free.get_mut(&total).and_then(Vec::pop) {
+            return Ok(ws);
+        }
+        Ok(self.bump(total))
+    }
+
+    fn bump(&mut self, total: usize) -> Wptr {
+        let fits = self
+            .chunks
+            .last()
+            .is_some_and(|c| self.used + total <= c.len());
+        if !fits {
+            self.chunks
+                .push(vec![0; CHUNK_WORDS.max(total)].into_boxed_slice());
+            self.used = 0;
+        }
+        let chunk = self.chunks.last_mut().expect("a chunk was just ensured");
+        let base = chunk[self.used..].as_mut_ptr();
+        self.used += total;
+        // SAFETY: `base + HEADER_WORDS` is inside the `total` words just reserved.
+        unsafe { base.add(slot::HEADER_WORDS) }
+    }
+
+    /// Returns a workspace to its size's free list.
+    ///
+    /// # Safety
+    /// `ws` came from `alloc(words)` on this arena and is no longer used.
+    pub(crate) unsafe fn free(&mut self, ws: Wptr, words: usize) {
+        let total = words.max(1) + slot::HEADER_WORDS;
+        self.in_use -= total * size_of::<Word>();
+        self.free.entry(total).or_default().push(ws);
+    }
+
+    /// High-water mark of allocated bytes.
+    pub(crate) fn peak_bytes(&self) -> u64 {
+        self.peak as u64
+    }
+}

@@ -1,0 +1,164 @@
+//! One-word channels: `rt_in` and `rt_out` (T800 `in`/`out`, KRoC CCSP's channel word).
+//!
+//! Three layers, which do not interfere: **scheduling** (blocking the caller, requeueing the
+//! partner: [`Node::schedule`]), **channel-word manipulation** (this module) and **data movement**
+//! ([`copy`]). Why one word: a channel is always between exactly one reader and one writer, so the
+//! first party to arrive parks itself in the word and the second completes the transfer; no
+//! buffer, no lock, and a channel costs 8 bytes.
+//!
+//! # The channel word
+//!
+//! ```text
+//!                 in/out first                     other side arrives:
+//!   +-------+  -------------------->  +-----------+  copies, clears  +-------+
+//!   | EMPTY |                         | Wptr|pri  | ---------------> | EMPTY |
+//!   |  (0)  |  <--------------------  +-----------+  requeues first  +-------+
+//!   +-------+        disc
+//!       |  enbc (ALTing reader)          ^
+//!       v                                | out: overwrite with writer's Wptr|pri,
+//!   +---------------+ -------------------+ ALTer State := Ready (scheduled if Waiting)
+//!   | Wptr|ALT|pri  |
+//!   +---------------+
+//!
+//!   +------------------+  permanently: a link or host endpoint; `in`/`out` go to the
+//!   | endpoint|EXTERNAL|  endpoint's engine (crate::external)
+//!   +------------------+
+//! ```
+//!
+//! The second party copies the data and puts the first at the **back** of its run queue, then
+//! carries on (unless it is low priority and just woke a high-priority process: then it is
+//! preempted). While blocked, a frame's data pointer is in its `POINTER` slot.
+
+use crate::abi::{NOT_PROCESS, Status, Word, Wptr, alt_state, slot, tag, wait};
+use crate::frame::{get, set, wptr};
+use crate::node::Node;
+
+/// Copies `len` bytes from `src` to `dst`.
+///
+/// # Safety
+/// Both ranges are valid for `len` bytes and do not overlap (they belong to two processes).
+#[inline(always)]
+pub(crate) unsafe fn copy(src: *const u8, dst: *mut u8, len: Word) {
+    // SAFETY: caller contract; the 8-byte case avoids a memcpy call for INT-sized messages.
+    unsafe {
+        if len == 8 {
+            dst.cast::<u64>()
+                .write_unaligned(src.cast::<u64>().read_unaligned());
+        } else if len > 0 {
+            std::ptr::copy_nonoverlapping(src, dst, len as usize);
+        }
+    }
+}
+
+/// Parks the running frame `ws` in the channel word with its data pointer.
+///
+/// # Safety
+/// `chan` is a valid channel word, `ws` the running frame.
+#[inline(always)]
+unsafe fn park(node: &mut Node, ws: Wptr, chan: *mut Word, data: *mut u8, what: Word) {
+    // SAFETY: caller contract.
+    unsafe {
+        *chan = node.desc(ws);
+        set(ws, slot::POINTER, data as Word);
+        node.note_blocked(ws, what);
+    }
+}
+
+/// Input `len` bytes from channel `chan` into `data` (T800 `in`). Blocking point.
+///
+/// # Safety
+/// `node` is the running node, `ws` the calling frame (after-op index in `IPTR`), `chan` a channel
+/// word, `data` valid for `len` bytes and inside the frame's workspace (or otherwise live until
+/// the input completes).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn rt_in(
+    node: *mut Node,
+    ws: Wptr,
+    chan: *mut Word,
+    data: *mut u8,
+    len: Word,
+) -> Status {
+    // SAFETY: the caller passes the running node and a valid channel word.
+    let (node, w) = unsafe { (&mut *node, *chan) };
+    if w == NOT_PROCESS {
+        // SAFETY: first to arrive; wait for the outputter.
+        unsafe { park(node, ws, chan, data, chan as Word) };
+        return Status::BLOCKED;
+    }
+    if w & tag::EXTERNAL != 0 {
+        // SAFETY: an EXTERNAL word always points at one of this node's endpoints.
+        return unsafe { node.external_in(ws, chan, w, data, len) };
+    }
+    // SAFETY: an outputter is parked in the word; its POINTER slot is valid for `len` bytes.
+    unsafe {
+        copy(get(wptr(w), slot::POINTER) as *const u8, data, len);
+        *chan = NOT_PROCESS;
+    }
+    node.stats.communications += 1;
+    node.schedule(w);
+    node.continue_or_preempt(ws)
+}
+
+/// Output `len` bytes from `data` to channel `chan` (T800 `out`). Blocking point.
+///
+/// # Safety
+/// As for [`rt_in`]; `data` must stay valid until the output completes (keep it in the workspace).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn rt_out(
+    node: *mut Node,
+    ws: Wptr,
+    chan: *mut Word,
+    data: *mut u8,
+    len: Word,
+) -> Status {
+    // SAFETY: the caller passes the running node and a valid channel word.
+    let (node, w) = unsafe { (&mut *node, *chan) };
+    let what = chan as Word | wait::OUTPUT;
+    if w == NOT_PROCESS {
+        // SAFETY: first to arrive; wait for the inputter.
+        unsafe { park(node, ws, chan, data, what) };
+        return Status::BLOCKED;
+    }
+    if w & tag::EXTERNAL != 0 {
+        // SAFETY: an EXTERNAL word always points at one of this node's endpoints.
+        return unsafe { node.external_out(ws, chan, w, data, len) };
+    }
+    if w & tag::ALT != 0 {
+        // SAFETY: the reader is ALTing and enabled this channel; it is a live frame.
+        unsafe {
+            park(node, ws, chan, data, what);
+            node.alt_guard_ready(w);
+        }
+        return Status::BLOCKED;
+    }
+    // SAFETY: an inputter is parked in the word; its POINTER slot is valid for `len` bytes.
+    unsafe {
+        copy(data, get(wptr(w), slot::POINTER) as *mut u8, len);
+        *chan = NOT_PROCESS;
+    }
+    node.stats.communications += 1;
+    node.schedule(w);
+    node.continue_or_preempt(ws)
+}
+
+impl Node {
+    /// An ALTing process `w` (tagged descriptor) has a ready guard: Enabling or Waiting become
+    /// Ready; a Waiting one is scheduled.
+    ///
+    /// # Safety
+    /// `w` is the descriptor of a live ALTing frame of this node.
+    pub(crate) unsafe fn alt_guard_ready(&mut self, w: Word) {
+        let alter = wptr(w);
+        // SAFETY: caller contract.
+        unsafe {
+            match get(alter, slot::STATE) {
+                alt_state::WAITING => {
+                    set(alter, slot::STATE, alt_state::READY);
+                    self.schedule(w & !tag::ALT);
+                }
+                alt_state::ENABLING => set(alter, slot::STATE, alt_state::READY),
+                _ => {}
+            }
+        }
+    }
+}

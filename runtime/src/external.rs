@@ -1,0 +1,185 @@
+//! External endpoints: channel words that a host stream or a link stands behind.
+//!
+//! Such a channel word permanently holds `endpoint | TAG_EXTERNAL`, where `endpoint` is an
+//! [`External`] owned by the node (boxed, so its address is stable). `rt_in`/`rt_out`/ALT find the
+//! tag and call the endpoint's engine here instead of parking in the word. Compiled code does not
+//! know the difference: it passes the channel word's address as for any channel.
+
+use crate::abi::{Status, Word, Wptr, tag, wait};
+use crate::error::ErrorKind;
+use crate::host::HostStream;
+use crate::link::LinkEnd;
+use crate::node::Node;
+
+/// What stands behind an external channel word.
+#[derive(Debug)]
+pub(crate) enum Engine {
+    /// The host's input (`keyboard`).
+    HostIn,
+    /// A host output stream (`screen`, `error`).
+    HostOut(HostStream),
+    /// The sending end of a link.
+    LinkOut(LinkEnd),
+    /// The receiving end of a link.
+    LinkIn(LinkEnd),
+}
+
+/// An external endpoint and the channel word that designates it.
+#[derive(Debug)]
+#[repr(align(8))]
+pub(crate) struct External {
+    pub(crate) engine: Engine,
+    /// The channel word compiled code uses: `self as *const _ | TAG_EXTERNAL`.
+    pub(crate) word: Word,
+    /// A name for reports (`screen`, `link 0 out`...).
+    pub(crate) name: String,
+}
+
+/// The name of the endpoint designated by the EXTERNAL-tagged word `w`.
+///
+/// # Safety
+/// `w` was made by [`Node::add_external`] on a node that is still alive.
+pub(crate) unsafe fn external_name(w: Word) -> String {
+    // SAFETY: caller contract.
+    unsafe { (*((w & !tag::MASK) as *const External)).name.clone() }
+}
+
+impl Node {
+    /// Registers an endpoint and returns the address of its channel word.
+    pub(crate) fn add_external(&mut self, engine: Engine, name: &str) -> *mut Word {
+        let mut ext = Box::new(External {
+            engine,
+            word: 0,
+            name: name.to_string(),
+        });
+        ext.word = (&*ext as *const External as Word) | tag::EXTERNAL;
+        let chan = &mut ext.word as *mut Word;
+        self.externals.push(ext);
+        chan
+    }
+
+    /// Binds the top-level PROC's byte channels: returns the channel words of `keyboard`,
+    /// `screen` and `error`, in that order. Pass them as the main PROC's channel parameters.
+    pub fn host_channels(&mut self) -> [*mut Word; 3] {
+        [
+            self.add_external(Engine::HostIn, "keyboard"),
+            self.add_external(Engine::HostOut(HostStream::Screen), "screen"),
+            self.add_external(Engine::HostOut(HostStream::Error), "error"),
+        ]
+    }
+
+    /// The endpoint designated by the tagged word `w`.
+    ///
+    /// # Safety
+    /// `w` is an EXTERNAL-tagged word created by [`Node::add_external`] on this node.
+    unsafe fn external(&mut self, w: Word) -> &mut External {
+        // SAFETY: caller contract; the endpoint is boxed and owned by `self.externals`.
+        unsafe { &mut *((w & !tag::MASK) as *mut External) }
+    }
+
+    /// `rt_in` on an external channel.
+    ///
+    /// # Safety
+    /// As for `rt_in`; `w` is the channel's EXTERNAL-tagged word.
+    pub(crate) unsafe fn external_in(
+        &mut self,
+        ws: Wptr,
+        chan: *mut Word,
+        w: Word,
+        data: *mut u8,
+        len: Word,
+    ) -> Status {
+        // SAFETY: caller contract.
+        let engine = unsafe { &self.external(w).engine } as *const Engine;
+        // SAFETY: `data` is valid for `len` bytes (rt_in contract); the endpoint outlives the call.
+        unsafe {
+            let buf = std::slice::from_raw_parts_mut(data, len.max(0) as usize);
+            match &*engine {
+                Engine::HostIn => {
+                    let r = self.host.read(buf);
+                    self.host_result(ws, r)
+                }
+                Engine::LinkIn(end) => self.link_in(end, ws, chan as Word, data, len),
+                _ => self.protocol_error(ws),
+            }
+        }
+    }
+
+    /// `rt_out` on an external channel.
+    ///
+    /// # Safety
+    /// As for `rt_out`; `w` is the channel's EXTERNAL-tagged word.
+    pub(crate) unsafe fn external_out(
+        &mut self,
+        ws: Wptr,
+        chan: *mut Word,
+        w: Word,
+        data: *mut u8,
+        len: Word,
+    ) -> Status {
+        // SAFETY: caller contract.
+        let engine = unsafe { &self.external(w).engine } as *const Engine;
+        // SAFETY: `data` is valid for `len` bytes (rt_out contract); the endpoint outlives the
+        // call.
+        unsafe {
+            let buf = std::slice::from_raw_parts(data, len.max(0) as usize);
+            match &*engine {
+                Engine::HostOut(stream) => {
+                    let r = self.host.write(*stream, buf);
+                    self.host_result(ws, r)
+                }
+                Engine::LinkOut(end) => {
+                    self.link_out(end, ws, chan as Word | wait::OUTPUT, data, len)
+                }
+                _ => self.protocol_error(ws),
+            }
+        }
+    }
+
+    /// `enbc` on an external channel: whether input is ready now (else the ALTer is registered
+    /// to be woken).
+    ///
+    /// # Safety
+    /// `ws` is the ALTing frame; `w` an EXTERNAL-tagged word of this node.
+    pub(crate) unsafe fn external_enable(&mut self, ws: Wptr, w: Word) -> bool {
+        // SAFETY: caller contract.
+        let engine = unsafe { &self.external(w).engine } as *const Engine;
+        // SAFETY: the endpoint outlives the call.
+        match unsafe { &*engine } {
+            Engine::HostIn => true,
+            Engine::LinkIn(end) => self.link_enable(end, ws),
+            _ => false,
+        }
+    }
+
+    /// `disc` on an external channel: whether input is ready (and unregisters the ALTer).
+    ///
+    /// # Safety
+    /// As for [`Node::external_enable`].
+    pub(crate) unsafe fn external_disable(&mut self, ws: Wptr, w: Word) -> bool {
+        // SAFETY: caller contract.
+        let engine = unsafe { &self.external(w).engine } as *const Engine;
+        // SAFETY: the endpoint outlives the call.
+        match unsafe { &*engine } {
+            Engine::HostIn => true,
+            Engine::LinkIn(end) => self.link_disable(end, ws),
+            _ => false,
+        }
+    }
+
+    fn host_result(&mut self, ws: Wptr, r: std::io::Result<()>) -> Status {
+        match r {
+            Ok(()) => {
+                self.stats.communications += 1;
+                Status::DONE
+            }
+            // SAFETY: `ws` is the running frame.
+            Err(_) => unsafe { crate::error::rt_error(self, ws, ErrorKind::Host as Word, -1) },
+        }
+    }
+
+    fn protocol_error(&mut self, ws: Wptr) -> Status {
+        // SAFETY: `ws` is the running frame.
+        unsafe { crate::error::rt_error(self, ws, ErrorKind::Host as Word, -1) }
+    }
+}

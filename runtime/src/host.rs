@@ -1,0 +1,94 @@
+//! Host I/O: the top-level PROC's `keyboard`, `screen` and `error` byte channels.
+//!
+//! The three channels are external endpoints ([`crate::Node::host_channels`]): output on `screen`
+//! or `error` appends to a buffered writer and completes at once; input on `keyboard` flushes the
+//! screen, then reads from the host's input (blocking the node's thread, like KRoC's blocking
+//! keyboard process). At end of input the keyboard delivers byte 255 ([`END_OF_INPUT`]), and
+//! again on every later read. Output is flushed when the node stops, in every case.
+
+use std::io::{BufWriter, Read, Write};
+
+/// Which host stream an output endpoint writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HostStream {
+    /// `screen`: standard output.
+    Screen,
+    /// `error`: standard error.
+    Error,
+}
+
+/// The byte delivered by `keyboard` at end of input.
+pub const END_OF_INPUT: u8 = 255;
+
+/// The host streams a node's host channels are bound to.
+pub struct HostIo {
+    input: Box<dyn Read + Send>,
+    screen: BufWriter<Box<dyn Write + Send>>,
+    error: BufWriter<Box<dyn Write + Send>>,
+}
+
+impl std::fmt::Debug for HostIo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("HostIo")
+    }
+}
+
+impl HostIo {
+    /// Binds to the given streams (tests pass in-memory buffers).
+    pub fn new(
+        input: Box<dyn Read + Send>,
+        screen: Box<dyn Write + Send>,
+        error: Box<dyn Write + Send>,
+    ) -> HostIo {
+        HostIo {
+            input,
+            screen: BufWriter::with_capacity(1 << 16, screen),
+            error: BufWriter::new(error),
+        }
+    }
+
+    /// Binds to the process's stdin, stdout and stderr.
+    pub fn stdio() -> HostIo {
+        HostIo::new(
+            Box::new(std::io::stdin()),
+            Box::new(std::io::stdout()),
+            Box::new(std::io::stderr()),
+        )
+    }
+
+    /// Writes `bytes` to `stream`. Error output is flushed at once.
+    pub(crate) fn write(&mut self, stream: HostStream, bytes: &[u8]) -> std::io::Result<()> {
+        match stream {
+            HostStream::Screen => self.screen.write_all(bytes),
+            HostStream::Error => {
+                self.error.write_all(bytes)?;
+                self.error.flush()
+            }
+        }
+    }
+
+    /// Fills `buf` from the input (flushing the screen first); [`END_OF_INPUT`] past the end.
+    pub(crate) fn read(&mut self, buf: &mut [u8]) -> std::io::Result<()> {
+        self.screen.flush()?;
+        let mut filled = 0;
+        while filled < buf.len() {
+            match self.input.read(&mut buf[filled..]) {
+                Ok(0) => {
+                    buf[filled..].fill(END_OF_INPUT);
+                    return Ok(());
+                }
+                Ok(n) => filled += n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(())
+    }
+
+    /// Flushes both output streams.
+    pub(crate) fn flush(&mut self) -> Result<(), crate::RunError> {
+        self.screen.flush()?;
+        self.error.flush()?;
+        Ok(())
+    }
+}

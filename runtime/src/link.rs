@@ -1,0 +1,324 @@
+//! Links between nodes, cross-node wake-ups and network-wide deadlock detection.
+//!
+//! A link direction is a shared [`LinkShared`] behind an external channel word on each node: the
+//! output end on one node, the input end on the other, possibly on another OS thread. It follows
+//! the soft-channel rule: the first party registers itself (descriptor, data pointer, length, its
+//! node's mailbox) and blocks; the second copies the message, completes, and posts the first's
+//! descriptor to the first's node [`Mailbox`]; that node requeues it when it drains its mail. An
+//! ALT on a link input registers in the link and is posted an ALT-tagged descriptor when a writer
+//! arrives.
+//!
+//! Copying into another node's workspace is sound because the blocked frame's node does not touch
+//! it until it has taken the descriptor from its mailbox, and the link's mutex (held while copying
+//! and posting) orders the two.
+//!
+//! A [`Network`] counts its nodes, those idle with nothing but link waits, and mail in flight: when
+//! every node is idle (or finished) and no mail is in flight, no link can move and each waiting
+//! node reports a deadlock instead of waiting for ever.
+
+use std::sync::atomic::{AtomicUsize, Ordering::SeqCst};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::time::Duration;
+
+use crate::abi::{Status, Word, Wptr, tag};
+use crate::chan::copy;
+use crate::error::{ErrorKind, RunError};
+use crate::external::Engine;
+use crate::node::Node;
+
+/// How often an idle node re-checks the network for deadlock.
+const IDLE_POLL: Duration = Duration::from_millis(2);
+
+/// A node's inbox of descriptors to requeue, posted by other nodes.
+#[derive(Debug, Default)]
+pub struct Mailbox {
+    mail: Mutex<Vec<Word>>,
+    ready: Condvar,
+}
+
+impl Mailbox {
+    fn lock(&self) -> MutexGuard<'_, Vec<Word>> {
+        self.mail.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn post(&self, desc: Word) {
+        self.lock().push(desc);
+        self.ready.notify_one();
+    }
+
+    /// Waits up to `d` for mail; returns whether there is some.
+    fn wait(&self, d: Duration) -> bool {
+        let mail = self.lock();
+        if !mail.is_empty() {
+            return true;
+        }
+        let (mail, _) = self
+            .ready
+            .wait_timeout(mail, d)
+            .unwrap_or_else(|p| p.into_inner());
+        !mail.is_empty()
+    }
+}
+
+/// Counters shared by the nodes of one network.
+#[derive(Debug, Default)]
+pub(crate) struct NetState {
+    nodes: AtomicUsize,
+    idle: AtomicUsize,
+    in_flight: AtomicUsize,
+}
+
+/// A set of nodes joined by links.
+#[derive(Debug, Clone, Default)]
+pub struct Network {
+    state: Arc<NetState>,
+}
+
+/// One party registered at a link.
+#[derive(Debug)]
+struct Party {
+    desc: Word,
+    data: usize,
+    len: Word,
+    mailbox: Arc<Mailbox>,
+}
+
+#[derive(Debug, Default)]
+struct LinkState {
+    writer: Option<Party>,
+    reader: Option<Party>,
+    alt: Option<(Word, Arc<Mailbox>)>,
+}
+
+/// The shared state of one link direction.
+#[derive(Debug)]
+pub(crate) struct LinkShared {
+    state: Mutex<LinkState>,
+    net: Arc<NetState>,
+}
+
+/// One end of a link direction, held by an external endpoint.
+#[derive(Debug, Clone)]
+pub(crate) struct LinkEnd {
+    shared: Arc<LinkShared>,
+}
+
+impl LinkEnd {
+    fn lock(&self) -> MutexGuard<'_, LinkState> {
+        self.shared.state.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn post(&self, to: &Mailbox, desc: Word) {
+        self.shared.net.in_flight.fetch_add(1, SeqCst);
+        to.post(desc);
+    }
+}
+
+impl Network {
+    /// An empty network.
+    pub fn new() -> Network {
+        Network::default()
+    }
+
+    /// Adds `node` to the network (once per node, before connecting it).
+    pub fn join(&self, node: &mut Node) {
+        self.state.nodes.fetch_add(1, SeqCst);
+        node.net = Some(self.state.clone());
+    }
+
+    /// Creates a link direction from `from` to `to` (both joined): returns the channel word on
+    /// `from` to output to, and the one on `to` to input from.
+    pub fn connect(&self, from: &mut Node, to: &mut Node, name: &str) -> (*mut Word, *mut Word) {
+        let shared = Arc::new(LinkShared {
+            state: Mutex::new(LinkState::default()),
+            net: self.state.clone(),
+        });
+        let out = LinkEnd {
+            shared: shared.clone(),
+        };
+        let inp = LinkEnd { shared };
+        (
+            from.add_external(Engine::LinkOut(out), &format!("{name} (link out)")),
+            to.add_external(Engine::LinkIn(inp), &format!("{name} (link in)")),
+        )
+    }
+}
+
+impl Node {
+    /// Output on a link.
+    ///
+    /// # Safety
+    /// `ws` is the running frame; `data` valid for `len` bytes and live until the output ends.
+    pub(crate) unsafe fn link_out(
+        &mut self,
+        end: &LinkEnd,
+        ws: Wptr,
+        what: Word,
+        data: *mut u8,
+        len: Word,
+    ) -> Status {
+        let mut st = end.lock();
+        if let Some(r) = st.reader.take() {
+            drop(st);
+            // SAFETY: the reader is blocked; its buffer is valid for `r.len` bytes.
+            return unsafe { self.link_complete(end, ws, r, data, len, true) };
+        }
+        st.writer = Some(self.party(ws, data, len));
+        if let Some((alter, mailbox)) = st.alt.take() {
+            end.post(&mailbox, alter);
+        }
+        drop(st);
+        // SAFETY: `ws` is the running frame.
+        unsafe { self.note_blocked(ws, what) };
+        self.link_waiters += 1;
+        Status::BLOCKED
+    }
+
+    /// Input from a link.
+    ///
+    /// # Safety
+    /// As for [`Node::link_out`].
+    pub(crate) unsafe fn link_in(
+        &mut self,
+        end: &LinkEnd,
+        ws: Wptr,
+        what: Word,
+        data: *mut u8,
+        len: Word,
+    ) -> Status {
+        let mut st = end.lock();
+        if let Some(w) = st.writer.take() {
+            drop(st);
+            // SAFETY: the writer is blocked; its buffer is valid for `w.len` bytes.
+            return unsafe { self.link_complete(end, ws, w, data, len, false) };
+        }
+        st.reader = Some(self.party(ws, data, len));
+        drop(st);
+        // SAFETY: `ws` is the running frame.
+        unsafe { self.note_blocked(ws, what) };
+        self.link_waiters += 1;
+        Status::BLOCKED
+    }
+
+    fn party(&self, ws: Wptr, data: *mut u8, len: Word) -> Party {
+        Party {
+            desc: self.desc(ws),
+            data: data as usize,
+            len,
+            mailbox: self.mailbox.clone(),
+        }
+    }
+
+    /// The second party moves the data and wakes the first.
+    ///
+    /// # Safety
+    /// `other` is blocked with a buffer of `other.len` bytes; `mine` is ours, `len` bytes.
+    unsafe fn link_complete(
+        &mut self,
+        end: &LinkEnd,
+        ws: Wptr,
+        other: Party,
+        mine: *mut u8,
+        len: Word,
+        outputting: bool,
+    ) -> Status {
+        if other.len != len {
+            // SAFETY: `ws` is the running frame.
+            return unsafe {
+                crate::error::rt_error(self, ws, ErrorKind::MessageLength as Word, -1)
+            };
+        }
+        // SAFETY: caller contract.
+        unsafe {
+            if outputting {
+                copy(mine, other.data as *mut u8, len);
+            } else {
+                copy(other.data as *const u8, mine, len);
+            }
+        }
+        end.post(&other.mailbox, other.desc);
+        self.stats.communications += 1;
+        Status::DONE
+    }
+
+    /// `enbc` on a link input: ready if a writer waits, else registers the ALTer.
+    pub(crate) fn link_enable(&mut self, end: &LinkEnd, ws: Wptr) -> bool {
+        let mut st = end.lock();
+        if st.writer.is_some() {
+            return true;
+        }
+        st.alt = Some((self.desc(ws) | tag::ALT, self.mailbox.clone()));
+        self.link_waiters += 1;
+        false
+    }
+
+    /// `disc` on a link input: unregisters the ALTer (withdrawing a wake-up already posted) and
+    /// reports whether a writer waits.
+    pub(crate) fn link_disable(&mut self, end: &LinkEnd, ws: Wptr) -> bool {
+        let mut st = end.lock();
+        let me = self.desc(ws) | tag::ALT;
+        if st.alt.take().is_some() {
+            self.link_waiters -= 1;
+        } else {
+            let mut mail = self.mailbox.lock();
+            if let Some(i) = mail.iter().position(|&d| d == me) {
+                mail.remove(i);
+                end.shared.net.in_flight.fetch_sub(1, SeqCst);
+                self.link_waiters -= 1;
+            }
+        }
+        st.writer.is_some()
+    }
+
+    /// Requeues every descriptor posted by other nodes.
+    pub(crate) fn drain_mailbox(&mut self) {
+        let mail = std::mem::take(&mut *self.mailbox.lock());
+        for &desc in &mail {
+            self.link_waiters -= 1;
+            if desc & tag::ALT != 0 {
+                // SAFETY: an ALT-tagged mail names a live ALTing frame of this node that
+                // registered at a link and has not disabled it (disable withdraws the mail).
+                unsafe { self.alt_guard_ready(desc) };
+            } else {
+                self.schedule(desc);
+            }
+        }
+        if let Some(net) = &self.net {
+            net.in_flight.fetch_sub(mail.len(), SeqCst);
+        }
+    }
+
+    /// Waits for mail (or until `timeout`, when a timer is due). Without a timer the node counts
+    /// as idle in its network; if the whole network is idle with no mail in flight, reports a
+    /// deadlock.
+    pub(crate) fn wait_mailbox(&mut self, timeout: Option<Duration>) -> Result<(), RunError> {
+        let Some(net) = self.net.clone() else {
+            // Links without a network cannot happen (connect needs one): just wait.
+            self.mailbox.wait(timeout.unwrap_or(IDLE_POLL));
+            return Ok(());
+        };
+        if let Some(d) = timeout {
+            self.mailbox.wait(d);
+            return Ok(());
+        }
+        net.idle.fetch_add(1, SeqCst);
+        while !self.mailbox.wait(IDLE_POLL) {
+            if net.idle.load(SeqCst) == net.nodes.load(SeqCst) && net.in_flight.load(SeqCst) == 0 {
+                self.net_finished = true;
+                return Err(RunError::Deadlock(self.deadlock_report()));
+            }
+        }
+        net.idle.fetch_sub(1, SeqCst);
+        Ok(())
+    }
+
+    /// Counts this node as idle for good in its network (it has stopped).
+    pub(crate) fn leave_network(&mut self) {
+        if let Some(net) = &self.net
+            && !self.net_finished
+        {
+            self.net_finished = true;
+            net.idle.fetch_add(1, SeqCst);
+        }
+    }
+}

@@ -1,0 +1,281 @@
+//! The scheduler: the T800 microcode's run queues and dispatch, in software.
+//!
+//! - Two FIFO run queues (high, low) linked through the `LINK` slot; a woken process goes to the
+//!   **back** of the queue of its own priority.
+//! - Dispatch order: the hand-off frame (the last PAR branch continuing as its parent), then the
+//!   high queue, then the interrupted low-priority frame, then the low queue; when nothing can run,
+//!   expired timers, the link mailbox, a sleep until the next timer, or a deadlock report.
+//! - A high-priority process made ready while a low one runs sets the yield flag and, at the next
+//!   runtime entry or back-edge poll, the low frame moves into the single *interrupted* slot.
+//! - Low-priority timeslicing: the shared ticker sets the yield flag every millisecond; a low
+//!   process polling it goes to the back of the low queue (only if someone else can run).
+//! - A frame returning `DONE` with a caller continues the caller (frame chain); a root returning
+//!   `DONE` ends its process.
+
+use std::sync::atomic::Ordering;
+
+use crate::abi::{NOT_PROCESS, ProcFn, Status, Word, Wptr, priority, slot};
+use crate::error::RunError;
+use crate::frame::{get, pri, set, wptr};
+use crate::node::Node;
+
+/// Dispatches between two reads of the clock for the timer queues while processes are runnable.
+const TIMER_CHECK_INTERVAL: u64 = 64;
+
+impl Node {
+    /// Makes the process `desc` (Wptr | priority) runnable at the back of its queue.
+    ///
+    /// A high-priority process woken while a low-priority one runs requests preemption.
+    #[inline]
+    pub(crate) fn schedule(&mut self, desc: Word) {
+        let p = pri(desc);
+        // SAFETY: descriptors on channels, timers and joins are live workspaces of this node.
+        unsafe { self.enqueue(wptr(desc), p) };
+        if p == priority::HIGH && self.cur_pri == priority::LOW {
+            self.yield_flag.store(1, Ordering::Relaxed);
+        }
+    }
+
+    /// Appends `ws` to the back of the `p` queue.
+    ///
+    /// # Safety
+    /// `ws` is a live workspace of this node on no queue.
+    #[inline]
+    pub(crate) unsafe fn enqueue(&mut self, ws: Wptr, p: Word) {
+        let q = &mut self.queues[p as usize];
+        // SAFETY: `ws` and `q.back` are live workspaces (caller and queue invariant).
+        unsafe {
+            set(ws, slot::LINK, NOT_PROCESS);
+            if q.front.is_null() {
+                q.front = ws;
+            } else {
+                set(q.back, slot::LINK, ws as Word);
+            }
+        }
+        q.back = ws;
+    }
+
+    #[inline]
+    fn dequeue(&mut self, p: Word) -> Option<Wptr> {
+        let q = &mut self.queues[p as usize];
+        if q.front.is_null() {
+            return None;
+        }
+        let ws = q.front;
+        // SAFETY: queued frames are live workspaces.
+        q.front = unsafe { get(ws, slot::LINK) } as Wptr;
+        Some(ws)
+    }
+
+    /// Whether a high-priority frame is waiting to run.
+    #[inline]
+    pub(crate) fn high_ready(&self) -> bool {
+        !self.queues[0].front.is_null() || (self.handoff != 0 && pri(self.handoff) == 0)
+    }
+
+    /// Ends a runtime entry that may have woken a high-priority process: a low-priority caller
+    /// is preempted into the interrupted slot (its `IPTR` already holds the after-op index).
+    #[inline]
+    pub(crate) fn continue_or_preempt(&mut self, ws: Wptr) -> Status {
+        if self.cur_pri == priority::LOW && self.high_ready() {
+            self.interrupted = ws;
+            return Status::BLOCKED;
+        }
+        Status::DONE
+    }
+
+    /// Records that `ws` blocks on `what` (a [`crate::abi::wait`] value or channel address), for
+    /// deadlock reports.
+    ///
+    /// # Safety
+    /// `ws` is a live frame of this node.
+    #[inline]
+    pub(crate) unsafe fn note_blocked(&mut self, ws: Wptr, what: Word) {
+        // SAFETY: `ws` and its root are live frames (caller contract, frame-chain protocol).
+        unsafe {
+            set(ws, slot::WAIT, what);
+            set(get(ws, slot::ROOT) as Wptr, slot::INNER, ws as Word);
+        }
+    }
+
+    /// The descriptor of the running frame `ws`.
+    #[inline]
+    pub(crate) fn desc(&self, ws: Wptr) -> Word {
+        ws as Word | self.cur_pri
+    }
+
+    /// Picks the next frame to run and sets the current priority.
+    fn next_frame(&mut self) -> Option<Wptr> {
+        if self.handoff != NOT_PROCESS {
+            let d = std::mem::replace(&mut self.handoff, NOT_PROCESS);
+            self.cur_pri = pri(d);
+            return Some(wptr(d));
+        }
+        self.stats.context_switches += 1;
+        if self
+            .stats
+            .context_switches
+            .is_multiple_of(TIMER_CHECK_INTERVAL)
+        {
+            self.poll_events();
+        }
+        if let Some(ws) = self.dequeue(priority::HIGH) {
+            self.cur_pri = priority::HIGH;
+            return Some(ws);
+        }
+        self.cur_pri = priority::LOW;
+        self.yield_flag.store(0, Ordering::Relaxed);
+        if !self.interrupted.is_null() {
+            return Some(std::mem::replace(
+                &mut self.interrupted,
+                std::ptr::null_mut(),
+            ));
+        }
+        self.dequeue(priority::LOW)
+    }
+
+    /// Fires expired timers and drains the link mailbox.
+    pub(crate) fn poll_events(&mut self) {
+        if !self.timers[0].is_null() || !self.timers[1].is_null() {
+            let now = self.now();
+            self.fire_timers(now);
+        }
+        if self.link_waiters > 0 {
+            self.drain_mailbox();
+        }
+    }
+
+    /// The main loop of [`Node::run`].
+    pub(crate) fn run_loop(&mut self) -> Result<(), RunError> {
+        loop {
+            match self.next_frame() {
+                Some(ws) => self.dispatch(ws)?,
+                None => {
+                    if !self.idle()? {
+                        return Ok(());
+                    }
+                }
+            }
+        }
+    }
+
+    /// Runs `ws` and, while frames finish, their callers.
+    fn dispatch(&mut self, mut ws: Wptr) -> Result<(), RunError> {
+        loop {
+            // SAFETY: runnable frames are live workspaces whose CODE slot holds a ProcFn stored by
+            // `start_root` or by the caller (frame-chain protocol).
+            let status = unsafe {
+                let code: ProcFn =
+                    std::mem::transmute::<usize, ProcFn>(get(ws, slot::CODE) as usize);
+                code(ws, self)
+            };
+            match status {
+                Status::DONE => {
+                    // SAFETY: `ws` is still live: it just returned.
+                    let caller = unsafe { get(ws, slot::CALLER) } as Wptr;
+                    if caller.is_null() {
+                        // SAFETY: a root that returned DONE has ended.
+                        unsafe { self.end_root(ws) };
+                        return Ok(());
+                    }
+                    ws = caller;
+                }
+                Status::BLOCKED => return Ok(()),
+                Status::HALTED => return Err(self.halt_error()),
+                Status(other) => return Err(RunError::BadStatus(other)),
+            }
+        }
+    }
+
+    /// Handles a node with nothing runnable. Returns `Ok(true)` to go on, `Ok(false)` when every
+    /// process has ended.
+    fn idle(&mut self) -> Result<bool, RunError> {
+        if self.timers[0].is_null() && self.timers[1].is_null() && self.link_waiters == 0 {
+            if self.live.is_null() {
+                return Ok(false);
+            }
+            return Err(RunError::Deadlock(self.deadlock_report()));
+        }
+        self.wait_for_events()?;
+        Ok(true)
+    }
+
+    /// Adds a root to the live list.
+    ///
+    /// # Safety
+    /// `ws` is a root workspace not on the list.
+    pub(crate) unsafe fn live_insert(&mut self, ws: Wptr) {
+        // SAFETY: `ws` and the current head are live roots.
+        unsafe {
+            set(ws, slot::LIVE_PREV, 0);
+            set(ws, slot::LIVE_NEXT, self.live as Word);
+            if !self.live.is_null() {
+                set(self.live, slot::LIVE_PREV, ws as Word);
+            }
+        }
+        self.live = ws;
+    }
+
+    /// Removes an ended root from the live list.
+    ///
+    /// # Safety
+    /// `ws` is on the live list.
+    pub(crate) unsafe fn end_root(&mut self, ws: Wptr) {
+        // SAFETY: list neighbours are live roots.
+        unsafe {
+            let prev = get(ws, slot::LIVE_PREV) as Wptr;
+            let next = get(ws, slot::LIVE_NEXT) as Wptr;
+            if prev.is_null() {
+                self.live = next;
+            } else {
+                set(prev, slot::LIVE_NEXT, next as Word);
+            }
+            if !next.is_null() {
+                set(next, slot::LIVE_PREV, prev as Word);
+            }
+        }
+    }
+}
+
+/// Back-edge poll target, called when the yield flag is set.
+///
+/// At high priority: `DONE` (high processes are never timesliced). At low priority: preempted into
+/// the interrupted slot if a high process is ready; put at the back of the low queue if anything
+/// else could run; otherwise `DONE`.
+///
+/// # Safety
+/// `node` is the running node and `ws` the calling frame, its `IPTR` holding the loop-head index.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn rt_timeslice(node: *mut Node, ws: Wptr) -> Status {
+    // SAFETY: the caller passes the running node.
+    let node = unsafe { &mut *node };
+    if node.cur_pri == priority::HIGH {
+        return Status::DONE;
+    }
+    node.yield_flag.store(0, Ordering::Relaxed);
+    node.poll_events();
+    if node.continue_or_preempt(ws) == Status::BLOCKED {
+        return Status::BLOCKED;
+    }
+    if node.queues[1].front.is_null() {
+        return Status::DONE;
+    }
+    // SAFETY: `ws` is the running frame, on no queue.
+    unsafe { node.enqueue(ws, priority::LOW) };
+    Status::BLOCKED
+}
+
+/// The RESCHEDULE predefine: the caller goes to the back of its priority's run queue.
+///
+/// # Safety
+/// As for [`rt_timeslice`].
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn rt_reschedule(node: *mut Node, ws: Wptr) -> Status {
+    // SAFETY: the caller passes the running node and its running frame.
+    unsafe {
+        let node = &mut *node;
+        let p = node.cur_pri;
+        node.enqueue(ws, p);
+    }
+    Status::BLOCKED
+}

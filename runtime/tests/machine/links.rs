@@ -1,0 +1,143 @@
+//! Two nodes on two OS threads joined by links; network-wide deadlock detection.
+
+use occ_runtime::abi::{Status, Word, Wptr};
+use occ_runtime::chan::{rt_in, rt_out};
+use occ_runtime::{Network, Node, RunError};
+
+use crate::common::*;
+
+/// Sends i = 0..n over local 0, reads a reply over local 1 each time, sums the replies in 5.
+/// Locals: 0 out, 1 in, 2 n, 3 i, 4 buffer, 5 sum.
+unsafe extern "C" fn pinger(ws: Wptr, node: *mut Node) -> Status {
+    unsafe {
+        loop {
+            match iptr(ws) {
+                0 => {
+                    *l(ws, 3) = 0;
+                    *l(ws, 5) = 0;
+                    set_iptr(ws, 1);
+                }
+                1 => {
+                    if *l(ws, 3) == *l(ws, 2) {
+                        return Status::DONE;
+                    }
+                    *l(ws, 4) = *l(ws, 3);
+                    set_iptr(ws, 2);
+                    check!(rt_out(node, ws, *l(ws, 0) as *mut Word, l(ws, 4).cast(), 8));
+                }
+                2 => {
+                    set_iptr(ws, 3);
+                    check!(rt_in(node, ws, *l(ws, 1) as *mut Word, l(ws, 4).cast(), 8));
+                }
+                _ => {
+                    *l(ws, 5) += *l(ws, 4);
+                    *l(ws, 3) += 1;
+                    set_iptr(ws, 1);
+                }
+            }
+        }
+    }
+}
+
+/// Reads a value over local 1 and replies with twice it over local 0, n times.
+/// Locals: 0 out, 1 in, 2 n, 3 i, 4 buffer.
+unsafe extern "C" fn doubler(ws: Wptr, node: *mut Node) -> Status {
+    unsafe {
+        loop {
+            match iptr(ws) {
+                0 => {
+                    *l(ws, 3) = 0;
+                    set_iptr(ws, 1);
+                }
+                1 => {
+                    if *l(ws, 3) == *l(ws, 2) {
+                        return Status::DONE;
+                    }
+                    set_iptr(ws, 2);
+                    check!(rt_in(node, ws, *l(ws, 1) as *mut Word, l(ws, 4).cast(), 8));
+                }
+                2 => {
+                    *l(ws, 4) *= 2;
+                    *l(ws, 3) += 1;
+                    set_iptr(ws, 1);
+                    check!(rt_out(node, ws, *l(ws, 0) as *mut Word, l(ws, 4).cast(), 8));
+                }
+                _ => unreachable!(),
+            }
+        }
+    }
+}
+
+fn run_on_thread(
+    mut node: Box<Node>,
+) -> std::thread::JoinHandle<(Box<Node>, Result<(), RunError>)> {
+    std::thread::spawn(move || {
+        let r = node.run();
+        (node, r)
+    })
+}
+
+#[test]
+fn ping_pong_over_links_between_two_threads() {
+    let net = Network::new();
+    let (mut a, _) = node();
+    let (mut b, _) = node();
+    net.join(&mut a);
+    net.join(&mut b);
+    let (a_out, b_in) = net.connect(&mut a, &mut b, "a->b");
+    let (b_out, a_in) = net.connect(&mut b, &mut a, "b->a");
+    let n = 1000;
+    let wa = spawn(&mut a, pinger, 6, &[a_out as Word, a_in as Word, n]) as usize;
+    spawn(&mut b, doubler, 5, &[b_out as Word, b_in as Word, n]);
+    let (ha, hb) = (run_on_thread(a), run_on_thread(b));
+    let (a, ra) = ha.join().unwrap();
+    let (b, rb) = hb.join().unwrap();
+    ra.unwrap();
+    rb.unwrap();
+    let sum = unsafe { *l(wa as Wptr, 5) };
+    assert_eq!(sum, (0..n).map(|i| 2 * i).sum::<Word>());
+    assert_eq!(
+        a.stats().communications + b.stats().communications,
+        2 * n as u64
+    );
+}
+
+#[test]
+fn network_deadlock_is_reported_by_every_waiting_node() {
+    let net = Network::new();
+    let (mut a, _) = node();
+    let (mut b, _) = node();
+    net.join(&mut a);
+    net.join(&mut b);
+    let (_a_out, b_in) = net.connect(&mut a, &mut b, "a->b");
+    let (_b_out, a_in) = net.connect(&mut b, &mut a, "b->a");
+    // Both nodes input first: neither ever outputs.
+    spawn(&mut a, doubler, 5, &[0, a_in as Word, 1]);
+    spawn(&mut b, doubler, 5, &[0, b_in as Word, 1]);
+    let (ha, hb) = (run_on_thread(a), run_on_thread(b));
+    for (h, name) in [(ha, "b->a (link in)"), (hb, "a->b (link in)")] {
+        let (_, r) = h.join().unwrap();
+        let err = r.expect_err("deadlock");
+        let text = err.to_string();
+        assert!(matches!(err, RunError::Deadlock(_)));
+        assert!(
+            text.contains(&format!("input from channel {name}")),
+            "{text}"
+        );
+    }
+}
+
+#[test]
+fn a_finished_node_does_not_keep_its_peer_waiting() {
+    let net = Network::new();
+    let (mut a, _) = node();
+    let (mut b, _) = node();
+    net.join(&mut a);
+    net.join(&mut b);
+    let (_a_out, b_in) = net.connect(&mut a, &mut b, "a->b");
+    spawn(&mut b, doubler, 5, &[0, b_in as Word, 1]);
+    // a has no process at all: it finishes at once; b must then report deadlock, not hang.
+    let (ha, hb) = (run_on_thread(a), run_on_thread(b));
+    assert!(ha.join().unwrap().1.is_ok());
+    assert!(matches!(hb.join().unwrap().1, Err(RunError::Deadlock(_))));
+}
