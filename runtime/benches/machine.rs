@@ -293,7 +293,7 @@ fn spawn(node: &mut Node, code: ProcFn, words: usize, init: &[Word]) -> Wptr {
 /// Runs commstime for `loops` loops and returns the elapsed time.
 fn commstime(loops: u64, delta: ProcFn, delta_words: usize) -> Duration {
     let mut node = fresh_node();
-    let mut chans = vec![0 as Word; 4];
+    let mut chans = [0 as Word; 4];
     let c: Vec<Word> = chans.iter_mut().map(|w| w as *mut Word as Word).collect();
     let (a, b, cc, d) = (c[0], c[1], c[2], c[3]);
     let n = loops as Word;
