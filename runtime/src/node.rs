@@ -153,6 +153,30 @@ impl Node {
         unsafe { self.start_root(ws, code, 0, priority::LOW) }
     }
 
+    /// Allocates a workspace of `words` locals, stores `params` in its first locals (for the main
+    /// PROC: its parameters, for example the addresses from [`Node::host_channels`]), and spawns
+    /// `code` there as a low-priority process. Returns the workspace.
+    ///
+    /// # Safety
+    /// `code` must be a [`ProcFn`] whose frame (including every sub-workspace) fits in `words`
+    /// locals and whose parameters are `params`.
+    pub unsafe fn launch(
+        &mut self,
+        code: ProcFn,
+        words: usize,
+        params: &[Word],
+    ) -> Result<Wptr, RunError> {
+        let ws = self.alloc_workspace(words.max(params.len()))?;
+        // SAFETY: a fresh workspace with at least `params.len()` locals; caller contract for code.
+        unsafe {
+            for (i, p) in params.iter().enumerate() {
+                *ws.add(i) = *p;
+            }
+            self.spawn(ws, code);
+        }
+        Ok(ws)
+    }
+
     /// Makes `ws` a process root at `entry` with priority `pri` and puts it on the run queue.
     ///
     /// # Safety

@@ -108,8 +108,14 @@ impl Node {
     fn next_frame(&mut self) -> Option<Wptr> {
         if self.handoff != NOT_PROCESS {
             let d = std::mem::replace(&mut self.handoff, NOT_PROCESS);
-            self.cur_pri = pri(d);
-            return Some(wptr(d));
+            if pri(d) == priority::LOW && !self.queues[0].front.is_null() {
+                // The parent continues the low branch that just ended: a ready high process
+                // preempts it, so it waits in the interrupted slot.
+                self.interrupted = wptr(d);
+            } else {
+                self.cur_pri = pri(d);
+                return Some(wptr(d));
+            }
         }
         self.stats.context_switches += 1;
         if self

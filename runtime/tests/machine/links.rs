@@ -141,3 +141,34 @@ fn a_finished_node_does_not_keep_its_peer_waiting() {
     assert!(ha.join().unwrap().1.is_ok());
     assert!(matches!(hb.join().unwrap().1, Err(RunError::Deadlock(_))));
 }
+
+#[test]
+fn alt_on_a_link_input_is_woken_by_the_remote_writer() {
+    let net = Network::new();
+    let (mut a, _) = node();
+    let (mut b, _) = node();
+    net.join(&mut a);
+    net.join(&mut b);
+    let (a_out, b_in) = net.connect(&mut a, &mut b, "a->b");
+    // b: PRI ALT { link ? x; tim ? AFTER now + 5 s }; a: wait 1 ms, then output 77.
+    let out = Box::into_raw(Box::new((-1 as Word, -1 as Word)));
+    spawn(
+        &mut b,
+        crate::timers::timed_alter,
+        7,
+        &[b_in as Word, 5_000_000, 0, out as Word],
+    );
+    spawn(
+        &mut a,
+        crate::timers::late_sender,
+        3,
+        &[a_out as Word, 77, 1000],
+    );
+    let (ha, hb) = (run_on_thread(a), run_on_thread(b));
+    ha.join().unwrap().1.unwrap();
+    hb.join().unwrap().1.unwrap();
+    // SAFETY: both nodes have finished; `out` was written by b's process.
+    let (sel, waited) = unsafe { *Box::from_raw(out) };
+    assert_eq!(sel, 0, "the link guard was selected");
+    assert!(waited < 4_000_000, "the timer did not fire ({waited} µs)");
+}

@@ -52,7 +52,7 @@ const DEADLINE: usize = 5;
 const SEL: usize = 6;
 
 /// PRI ALT { chan ? x; tim ? AFTER start + delay }.
-unsafe extern "C" fn timed_alter(ws: Wptr, node: *mut Node) -> Status {
+pub(crate) unsafe extern "C" fn timed_alter(ws: Wptr, node: *mut Node) -> Status {
     unsafe {
         loop {
             match iptr(ws) {
@@ -91,7 +91,7 @@ unsafe extern "C" fn timed_alter(ws: Wptr, node: *mut Node) -> Status {
 }
 
 /// Sleeps `delay` µs, then outputs. Locals: 0 chan, 1 value, 2 delay.
-unsafe extern "C" fn late_sender(ws: Wptr, node: *mut Node) -> Status {
+pub(crate) unsafe extern "C" fn late_sender(ws: Wptr, node: *mut Node) -> Status {
     unsafe {
         if iptr(ws) == 0 {
             let t = rt_timer_read(node) + *l(ws, 2);
