@@ -61,6 +61,38 @@
 //! priority order (PRI ALT: textual order), each with the guard's branch number; then `rt_altend`
 //! returns the selected branch number, on which the code switches. The selected channel branch
 //! then performs an ordinary `rt_in`. Every guard enabled must be disabled.
+//!
+//! # Emitted code, by example
+//!
+//! `PROC relay (CHAN INT in?, out!)` = `WHILE TRUE SEQ { in ? x; out ! x }`, locals: 0 = `in`
+//! (channel address), 1 = `out`, 2 = `x`:
+//!
+//! ```text
+//! fn relay(ws, node) -> status:
+//!   switch ws[IPTR]: 0 -> L0, 1 -> L1, 2 -> L2          ; br_table, default: trap
+//! L0: jump HEAD                                          ; entry
+//! HEAD:
+//!   ws[IPTR] = 1; st = rt_in(node, ws, ws[0], &ws[2], 8); if st != 0: return st
+//! L1:
+//!   ws[IPTR] = 2; st = rt_out(node, ws, ws[1], &ws[2], 8); if st != 0: return st
+//! L2:                                                    ; loop back-edge: the poll
+//!   if load.u32(node + YIELD_FLAG_OFFSET) != 0:
+//!     ws[IPTR] = 0; st = rt_timeslice(node, ws); if st != 0: return st
+//!   jump HEAD
+//! ```
+//!
+//! (Resuming at 0 re-enters the loop head, so the back-edge poll may reuse the entry index when
+//! the entry has nothing to initialise.) Rules of thumb:
+//! - A frame that contains no blocking point (and calls none) needs no resume indices and may be
+//!   called as a plain function; the frame-chain stores are only needed for callees that can block.
+//! - Values sent must be in the workspace (a temporary local for an expression): the receiver
+//!   copies from the sender's `POINTER` after the sender has returned `BLOCKED`.
+//! - PRI PAR: `rt_startp_pri(.., priority::HIGH)` for the first branch, `rt_startp` (inherit) for
+//!   the others; at high priority this starts every branch at high priority, as on a T800.
+//! - Runtime checks: `return rt_error(node, ws, ErrorKind::X as Word, location)`; STOP is
+//!   `ErrorKind::Stop` (the whole node halts, as in KRoC's default halt mode).
+//! - TIMER values are microseconds for both priorities (the T800's low-priority clock ticked
+//!   every 64 µs; this runtime uses one clock).
 
 use crate::node::Node;
 
@@ -312,4 +344,63 @@ pub static ABI_TABLE: &[AbiEntry] = &[
 /// Finds an entry of [`ABI_TABLE`] by name.
 pub fn abi_entry(name: &str) -> Option<&'static AbiEntry> {
     ABI_TABLE.iter().find(|e| e.name == name)
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+
+    #[test]
+    fn abi_table_is_consistent() {
+        for (i, e) in ABI_TABLE.iter().enumerate() {
+            assert!(e.name.starts_with("rt_"), "{}", e.name);
+            assert!(!e.addr.is_null());
+            assert!(
+                ABI_TABLE[..i].iter().all(|o| o.name != e.name),
+                "duplicate {}",
+                e.name
+            );
+            assert!(e.params.len() <= 6, "{} has too many parameters", e.name);
+            assert_eq!(
+                e.params[0],
+                AbiType::Ptr,
+                "{}: the node comes first",
+                e.name
+            );
+            if e.blocking {
+                assert_eq!(
+                    e.ret,
+                    Some(AbiType::Status),
+                    "{} blocks: it returns a Status",
+                    e.name
+                );
+            }
+        }
+        assert_eq!(abi_entry("rt_in").map(|e| e.params.len()), Some(5));
+        assert!(abi_entry("rt_nonesuch").is_none());
+    }
+
+    #[test]
+    fn slots_are_distinct_and_inside_the_header() {
+        let all = [
+            slot::IPTR,
+            slot::LINK,
+            slot::CODE,
+            slot::STATE,
+            slot::TLINK,
+            slot::TIME,
+            slot::CALLER,
+            slot::ROOT,
+            slot::SELECT,
+            slot::WAIT,
+            slot::INNER,
+            slot::LIVE_PREV,
+            slot::LIVE_NEXT,
+        ];
+        for (i, s) in all.iter().enumerate() {
+            assert!(*s < 0 && -*s <= slot::HEADER_WORDS as isize);
+            assert!(!all[..i].contains(s));
+        }
+        assert_eq!(slot::POINTER, slot::STATE);
+    }
 }
