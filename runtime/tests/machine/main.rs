@@ -11,4 +11,5 @@ mod host;
 mod links;
 mod par;
 mod sched;
+mod stress;
 mod timers;
