@@ -143,7 +143,7 @@ unsafe extern "C" fn fan_parent(ws: Wptr, node: *mut Node) -> Status {
                     *l(s, 4) = i as Word * 1_000_000;
                     *l(s, 5) = 0x9E37_79B9 + i as Word;
                     *l(ws, NEXT) += 1;
-                    let pri = if i % 3 == 0 {
+                    let pri = if i.is_multiple_of(3) {
                         priority::HIGH
                     } else {
                         priority::LOW
