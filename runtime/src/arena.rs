@@ -37,13 +37,16 @@ impl Arena {
 
     /// Allocates `words` words above Wptr plus the header below; returns Wptr.
     pub(crate) fn alloc(&mut self, words: usize) -> Result<Wptr, RunError> {
-        let total = words.max(1) + slot::HEADER_WORDS;
-        let bytes = total * size_of::<Word>();
-        if self.in_use + bytes > self.budget {
-            return Err(RunError::OutOfMemory {
-                requested: bytes,
-                budget: self.budget,
-            });
+        let too_big = RunError::OutOfMemory {
+            requested: words.saturating_mul(size_of::<Word>()),
+            budget: self.budget,
+        };
+        let Some(total) = words.max(1).checked_add(slot::HEADER_WORDS) else {
+            return Err(too_big);
+        };
+        let bytes = total.saturating_mul(size_of::<Word>());
+        if bytes > self.budget - self.in_use {
+            return Err(too_big);
         }
         self.in_use += bytes;
         self.peak = self.peak.max(self.in_use);

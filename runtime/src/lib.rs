@@ -7,6 +7,16 @@
 //! ([`error`]) and deadlock reports ([`deadlock`]). Nodes own all their state, so many run in one
 //! OS process; [`Network`] joins them with links.
 //!
+//! # Running a compiled program
+//!
+//! ```text
+//! let mut node = Node::new(NodeConfig::default(), program_info, HostIo::stdio());
+//! let [keyboard, screen, error] = node.host_channels();
+//! unsafe { node.launch(main_proc, main_frame_words, &[keyboard as Word, screen as Word, error as Word])? };
+//! node.run()?;                       // Err: RunError::Halted / Deadlock / OutOfMemory / ...
+//! eprintln!("{}", node.stats());     // occ run --stats
+//! ```
+//!
 //! # Example
 //!
 //! A process written by hand in the shape codegen emits: it outputs one byte on `screen`.

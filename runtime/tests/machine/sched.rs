@@ -103,3 +103,14 @@ fn memory_budget_is_enforced() {
         "{err}"
     );
 }
+
+#[test]
+fn absurd_workspace_sizes_are_errors_not_panics() {
+    let (mut node, _) = node();
+    for words in [usize::MAX, usize::MAX / 8, 1 << 40] {
+        assert!(matches!(
+            node.alloc_workspace(words),
+            Err(occ_runtime::RunError::OutOfMemory { .. })
+        ));
+    }
+}
