@@ -522,6 +522,13 @@ pub enum DeclKind {
     },
     /// A transputer `ASM` / `GUY` block kept as opaque text (it cannot run here).
     Asm(AsmBlock),
+    /// `PLACE x IN WORKSPACE:` / `PLACE x IN VECSPACE:` (an allocation hint; no effect here).
+    PlaceIn {
+        /// The placed name.
+        name: Name,
+        /// `WORKSPACE` or `VECSPACE`.
+        area: Name,
+    },
 }
 
 /// VAL, reference, RESULT or INITIAL.

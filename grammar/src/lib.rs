@@ -1,8 +1,66 @@
 //! The occam 2.1 front end: preprocessor, lexer (with occam's indentation layout), grammar and AST.
 //!
-//! Pipeline: `preprocess` → `lexer` → `layout` → `parser` → [`ast`]. Nothing here touches the file
-//! system: included files are supplied through a loader trait implemented by the caller.
+//! Pipeline: [`preprocess`] → [`lexer`] → [`layout`] → [`parser`] → [`ast`]. Nothing here touches
+//! the file system: included files are supplied through a [`preprocess::Loader`] implemented by
+//! the caller.
+//!
+//! # Example
+//!
+//! ```
+//! let source = "PROC hello (CHAN OF BYTE out!)\n  out ! 'h'\n:\n";
+//! let front = occ_grammar::parse_source("hello.occ", source, &mut std::collections::HashMap::new());
+//! assert!(front.diagnostics.is_empty());
+//! assert_eq!(front.program.decls.len(), 1);
+//! ```
 
 #![deny(missing_docs)]
 
+mod actions;
 pub mod ast;
+pub mod diagnostic;
+pub mod layout;
+pub mod lexer;
+pub mod parser;
+pub mod preprocess;
+pub mod print;
+pub mod source_map;
+
+use diagnostic::Diagnostic;
+use source_map::SourceMap;
+
+/// A preprocessed and parsed program with everything needed to report on it.
+#[derive(Debug)]
+pub struct Parsed {
+    /// The program (partial when there are errors).
+    pub program: ast::Program,
+    /// The preprocessed text the spans point into.
+    pub text: String,
+    /// The way from spans back to the original files.
+    pub map: SourceMap,
+    /// Preprocessor, lexer and parser diagnostics, in order.
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl Parsed {
+    /// Reports whether any diagnostic is an error.
+    pub fn has_errors(&self) -> bool {
+        self.diagnostics
+            .iter()
+            .any(|d| d.severity == diagnostic::Severity::Error)
+    }
+}
+
+/// Preprocesses and parses the file `path` whose text is `text`.
+pub fn parse_source(path: &str, text: &str, loader: &mut dyn preprocess::Loader) -> Parsed {
+    let pre = preprocess::preprocess(path, text, loader);
+    let (mut program, parse_diags) = parser::parse(&pre.text);
+    program.pragmas = pre.pragmas;
+    let mut diagnostics = pre.diagnostics;
+    diagnostics.extend(parse_diags);
+    Parsed {
+        program,
+        text: pre.text,
+        map: pre.map,
+        diagnostics,
+    }
+}

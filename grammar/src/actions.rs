@@ -1,0 +1,324 @@
+//! Small builders called from the grammar's actions (kept here so the grammar stays readable).
+
+use crate::ast::*;
+use crate::diagnostic::Diagnostic;
+use crate::lexer::Token;
+use lalrpop_util::{ErrorRecovery, ParseError};
+
+/// Builds a name.
+pub fn name(text: &str, l: usize, r: usize) -> Name {
+    Name {
+        text: text.to_string(),
+        span: Span::new(l, r),
+    }
+}
+
+/// Prepends `first` to `rest`.
+pub fn prepend<T>(first: T, rest: Vec<T>) -> Vec<T> {
+    let mut all = Vec::with_capacity(rest.len() + 1);
+    all.push(first);
+    all.extend(rest);
+    all
+}
+
+/// Records a recovered syntax error.
+pub fn recovered<'a>(
+    diags: &mut Vec<Diagnostic>,
+    error: ErrorRecovery<usize, Token<'a>, Diagnostic>,
+    l: usize,
+    r: usize,
+) -> Decl {
+    diags.push(crate::parser::syntax_error(error.error));
+    Decl {
+        kind: DeclKind::Var {
+            ty: Ty {
+                kind: TyKind::Int,
+                span: Span::new(l, r),
+            },
+            names: Vec::new(),
+        },
+        span: Span::new(l, r),
+    }
+}
+
+/// Operators that may be chained without parentheses (`a + b + c`).
+fn associative(op: BinOp) -> bool {
+    use BinOp::*;
+    matches!(
+        op,
+        Add | Mul | Plus | Times | BitAnd | BitOr | Xor | And | Or
+    )
+}
+
+/// Folds `first op e op e ...` left to right, reporting occam's parenthesis rule: different
+/// operators, or a repeated non-associative one, need parentheses.
+pub fn chain(diags: &mut Vec<Diagnostic>, first: Expr, rest: Vec<((BinOp, Span), Expr)>) -> Expr {
+    let mut lhs = first;
+    let mut previous: Option<BinOp> = None;
+    for ((op, op_span), rhs) in rest {
+        if let Some(prev) = previous {
+            if prev != op || !associative(op) {
+                diags.push(parenthesis_error(prev, op, op_span));
+            }
+        }
+        previous = Some(op);
+        let span = lhs.span.to(rhs.span);
+        lhs = Expr {
+            kind: ExprKind::Binary {
+                op,
+                lhs: Box::new(lhs),
+                rhs: Box::new(rhs),
+            },
+            span,
+        };
+    }
+    lhs
+}
+
+fn parenthesis_error(prev: BinOp, op: BinOp, span: Span) -> Diagnostic {
+    let (p, o) = (crate::print::binop_text(prev), crate::print::binop_text(op));
+    let message = if prev == op {
+        format!("`{o}` cannot be chained without parentheses")
+    } else {
+        format!("`{p}` and `{o}` are mixed without parentheses")
+    };
+    Diagnostic::error(
+        span,
+        message,
+        "I was expecting parentheses before this operator",
+    )
+    .with_help(format!(
+        "write (a {p} b) {o} c: occam needs parentheses between different operators, \
+             and has no precedence"
+    ))
+}
+
+/// Builds a conversion.
+pub fn conversion(ty: Ty, mode: ConvMode, operand: Expr, l: usize, r: usize) -> Expr {
+    Expr {
+        kind: ExprKind::Conversion {
+            ty,
+            mode,
+            operand: Box::new(operand),
+        },
+        span: Span::new(l, r),
+    }
+}
+
+/// Builds a slice.
+pub fn slice(base: Expr, from: Option<Expr>, count: Option<Expr>, l: usize, r: usize) -> Expr {
+    Expr {
+        kind: ExprKind::Slice {
+            base: Box::new(base),
+            from: from.map(Box::new),
+            count: count.map(Box::new),
+        },
+        span: Span::new(l, r),
+    }
+}
+
+/// Builds an array constructor `[i = b FOR n STEP s | v]` from its head `i = b`.
+pub fn constructor<'a>(
+    head: Expr,
+    count: Expr,
+    step: Option<Expr>,
+    value: Expr,
+    l: usize,
+    r: usize,
+) -> Result<Expr, ParseError<usize, Token<'a>, Diagnostic>> {
+    let ExprKind::Binary {
+        op: BinOp::Eq,
+        lhs,
+        rhs,
+    } = head.kind
+    else {
+        let diag = Diagnostic::error(
+            head.span,
+            "an array constructor starts with a replicator",
+            "I was expecting `name = start` here",
+        )
+        .with_help("write [i = 0 FOR n | value]");
+        return Err(ParseError::User { error: diag });
+    };
+    let ExprKind::Name(name) = lhs.kind else {
+        let diag = Diagnostic::error(lhs.span, "the replicator index must be a name", "here");
+        return Err(ParseError::User { error: diag });
+    };
+    let repl = Replicator {
+        name,
+        base: *rhs,
+        count,
+        step,
+        span: Span::new(l + 1, value.span.start),
+    };
+    Ok(Expr {
+        kind: ExprKind::Constructor {
+            repl: Box::new(repl),
+            value: Box::new(value),
+        },
+        span: Span::new(l, r),
+    })
+}
+
+/// Wraps `d` around process `p`, merging consecutive declarations into one scope.
+pub fn scope(d: Decl, p: Process, l: usize, r: usize) -> Process {
+    let (decls, body) = match p.kind {
+        ProcessKind::Scope { decls, body } => (prepend(d, decls), body),
+        kind => (vec![d], Box::new(Process { kind, span: p.span })),
+    };
+    Process {
+        kind: ProcessKind::Scope { decls, body },
+        span: Span::new(l, r),
+    }
+}
+
+/// Adds a leading declaration to a VALOF.
+pub fn valof_scope(d: Decl, mut v: Valof, l: usize, r: usize) -> Valof {
+    v.decls.insert(0, d);
+    v.span = Span::new(l, r);
+    v
+}
+
+/// Adds a leading declaration to a `? CASE` variant.
+pub fn variant_scope(d: Decl, mut v: Variant, l: usize, r: usize) -> Variant {
+    v.decls.insert(0, d);
+    v.span = Span::new(l, r);
+    v
+}
+
+/// Adds a leading declaration to an IF choice.
+pub fn choice_scope(d: Decl, mut c: Choice, l: usize, r: usize) -> Choice {
+    c.decls.insert(0, d);
+    c.span = Span::new(l, r);
+    c
+}
+
+/// Adds a leading declaration to an ALT alternative.
+pub fn alternative_scope(d: Decl, mut a: Alternative, l: usize, r: usize) -> Alternative {
+    a.decls.insert(0, d);
+    a.span = Span::new(l, r);
+    a
+}
+
+/// Adds a leading declaration to a CASE option.
+pub fn option_scope(d: Decl, mut o: CaseOption, l: usize, r: usize) -> CaseOption {
+    o.decls.insert(0, d);
+    o.span = Span::new(l, r);
+    o
+}
+
+/// Builds the one-line tagged input `c ? CASE tag; x` as a one-variant case input with a SKIP body.
+pub fn one_variant(chan: Expr, tag: Name, items: Vec<IoItem>, l: usize, r: usize) -> ProcessKind {
+    let body = Process {
+        kind: ProcessKind::Skip,
+        span: Span::new(r, r),
+    };
+    let variant = Variant {
+        decls: Vec::new(),
+        tag,
+        items,
+        body,
+        span: Span::new(l, r),
+    };
+    ProcessKind::CaseInput {
+        chan,
+        variants: vec![variant],
+    }
+}
+
+/// A formal parameter as written: with its own mode and type, or sharing the previous one's.
+pub enum ParamItem {
+    /// `VAL INT x`.
+    Full {
+        /// VAL, RESULT or reference.
+        mode: ParamMode,
+        /// The type.
+        ty: Ty,
+        /// The name.
+        name: Name,
+        /// A direction specifier.
+        dir: Option<Direction>,
+        /// The whole item.
+        span: Span,
+    },
+    /// `y` after `VAL INT x,`.
+    Bare {
+        /// The name.
+        name: Name,
+        /// A direction specifier.
+        dir: Option<Direction>,
+        /// The name's span.
+        span: Span,
+    },
+}
+
+/// Expands shared-type parameters (`VAL INT a, b`) to one [`Param`] per name.
+pub fn params<'a>(
+    items: Vec<ParamItem>,
+) -> Result<Vec<Param>, ParseError<usize, Token<'a>, Diagnostic>> {
+    let mut out: Vec<Param> = Vec::with_capacity(items.len());
+    for item in items {
+        let param = match item {
+            ParamItem::Full {
+                mode,
+                ty,
+                name,
+                dir,
+                span,
+            } => Param {
+                mode,
+                ty,
+                name,
+                dir,
+                span,
+            },
+            ParamItem::Bare { name, dir, span } => {
+                let Some(previous) = out.last() else {
+                    let diag = Diagnostic::error(span, "this parameter has no type", "here")
+                        .with_help("write a type before the first parameter: (VAL INT x, y)");
+                    return Err(ParseError::User { error: diag });
+                };
+                Param {
+                    mode: previous.mode,
+                    ty: previous.ty.clone(),
+                    name,
+                    dir,
+                    span,
+                }
+            }
+        };
+        out.push(param);
+    }
+    Ok(out)
+}
+
+/// Builds `PLACE x IN WORKSPACE:` (the word must be `IN`).
+pub fn place_in<'a>(
+    name: Name,
+    word: &str,
+    area: Name,
+) -> Result<DeclKind, ParseError<usize, Token<'a>, Diagnostic>> {
+    if word != "IN" {
+        let diag = Diagnostic::error(
+            area.span,
+            "expected PLACE x AT address or PLACE x IN WORKSPACE",
+            "here",
+        );
+        return Err(ParseError::User { error: diag });
+    }
+    Ok(DeclKind::PlaceIn { name, area })
+}
+
+/// Applies subscripts `[i][j]` to an operand that is not an element (`"abc"[i]`).
+pub fn subscripts(base: Expr, indices: Vec<(Expr, usize)>, _r: usize) -> Expr {
+    indices.into_iter().fold(base, |base, (index, end)| {
+        let span = Span::new(base.span.start, end);
+        Expr {
+            kind: ExprKind::Subscript {
+                base: Box::new(base),
+                index: Box::new(index),
+            },
+            span,
+        }
+    })
+}
