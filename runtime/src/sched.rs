@@ -245,9 +245,9 @@ impl Node {
 
 /// Back-edge poll target, called when the yield flag is set.
 ///
-/// At high priority: `DONE` (high processes are never timesliced). At low priority: preempted into
-/// the interrupted slot if a high process is ready; put at the back of the low queue if anything
-/// else could run; otherwise `DONE`.
+/// Clears the flag. At high priority: `DONE` (high processes are never timesliced). At low
+/// priority: preempted into the interrupted slot if a high process is ready; put at the back of
+/// the low queue if anything else could run; otherwise `DONE`.
 ///
 /// # Safety
 /// `node` is the running node and `ws` the calling frame, its `IPTR` holding the loop-head index.
@@ -255,10 +255,12 @@ impl Node {
 pub unsafe extern "C" fn rt_timeslice(node: *mut Node, ws: Wptr) -> Status {
     // SAFETY: the caller passes the running node.
     let node = unsafe { &mut *node };
+    // Clearing the flag is safe at either priority: at high priority it can only hold a tick
+    // (nothing preempts high), and a low process is re-flagged at the next tick.
+    node.yield_flag.store(0, Ordering::Relaxed);
     if node.cur_pri == priority::HIGH {
         return Status::DONE;
     }
-    node.yield_flag.store(0, Ordering::Relaxed);
     node.poll_events();
     if node.continue_or_preempt(ws) == Status::BLOCKED {
         return Status::BLOCKED;
