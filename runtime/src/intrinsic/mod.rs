@@ -15,6 +15,9 @@
 
 use crate::abi::Word;
 
+mod maths;
+mod strings;
+
 /// The occam kind of one intrinsic parameter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ParamKind {
@@ -91,177 +94,82 @@ impl Intrinsic {
     }
 }
 
+use MachineType::{F32, F64};
 use ParamKind::*;
 
-/// Every intrinsic, shared by the compiler (calls) and the runtime (definitions).
+/// A REAL FUNCTION intrinsic.
+macro_rules! real_fn {
+    ($name:literal, [$($p:expr),*], $r:expr, $f:path) => {
+        Intrinsic { name: $name, params: &[$($p),*], result: Some($r), addr: $f as *const u8 }
+    };
+}
+
+/// Every intrinsic, shared by the compiler (calls) and the runtime (definitions): the REAL
+/// predefines SQRT/DSQRT, SCALEB, LOGB, FPINT, NEXTAFTER (and D forms); the Inmos maths library
+/// (SIN ... POWER, single and double: results follow the host's libm to within an ulp or two,
+/// domain errors give NaN as in the Inmos library); and string conversions.
 pub static INTRINSICS: &[Intrinsic] = &[
-    Intrinsic {
-        name: "SQRT",
-        params: &[ValReal32],
-        result: Some(MachineType::F32),
-        addr: sqrt32 as *const u8,
-    },
-    Intrinsic {
-        name: "DSQRT",
-        params: &[ValReal64],
-        result: Some(MachineType::F64),
-        addr: sqrt64 as *const u8,
-    },
-    Intrinsic {
-        name: "DSIN",
-        params: &[ValReal64],
-        result: Some(MachineType::F64),
-        addr: sin64 as *const u8,
-    },
-    Intrinsic {
-        name: "DCOS",
-        params: &[ValReal64],
-        result: Some(MachineType::F64),
-        addr: cos64 as *const u8,
-    },
-    Intrinsic {
-        name: "DEXP",
-        params: &[ValReal64],
-        result: Some(MachineType::F64),
-        addr: exp64 as *const u8,
-    },
-    Intrinsic {
-        name: "DALOG",
-        params: &[ValReal64],
-        result: Some(MachineType::F64),
-        addr: ln64 as *const u8,
-    },
-    Intrinsic {
-        name: "DPOWER",
-        params: &[ValReal64, ValReal64],
-        result: Some(MachineType::F64),
-        addr: pow64 as *const u8,
-    },
-    Intrinsic {
-        name: "DATAN2",
-        params: &[ValReal64, ValReal64],
-        result: Some(MachineType::F64),
-        addr: atan2_64 as *const u8,
-    },
+    real_fn!("SQRT", [ValReal32], F32, maths::sqrt32),
+    real_fn!("DSQRT", [ValReal64], F64, maths::sqrt64),
+    real_fn!("SCALEB", [ValReal32, ValInt], F32, maths::scaleb32),
+    real_fn!("DSCALEB", [ValReal64, ValInt], F64, maths::scaleb64),
+    real_fn!("LOGB", [ValReal32], F32, maths::logb32),
+    real_fn!("DLOGB", [ValReal64], F64, maths::logb64),
+    real_fn!("FPINT", [ValReal32], F32, maths::fpint32),
+    real_fn!("DFPINT", [ValReal64], F64, maths::fpint64),
+    real_fn!("NEXTAFTER", [ValReal32, ValReal32], F32, maths::nextafter32),
+    real_fn!(
+        "DNEXTAFTER",
+        [ValReal64, ValReal64],
+        F64,
+        maths::nextafter64
+    ),
+    real_fn!("SIN", [ValReal32], F32, maths::sin32),
+    real_fn!("DSIN", [ValReal64], F64, maths::sin64),
+    real_fn!("COS", [ValReal32], F32, maths::cos32),
+    real_fn!("DCOS", [ValReal64], F64, maths::cos64),
+    real_fn!("TAN", [ValReal32], F32, maths::tan32),
+    real_fn!("DTAN", [ValReal64], F64, maths::tan64),
+    real_fn!("ASIN", [ValReal32], F32, maths::asin32),
+    real_fn!("DASIN", [ValReal64], F64, maths::asin64),
+    real_fn!("ACOS", [ValReal32], F32, maths::acos32),
+    real_fn!("DACOS", [ValReal64], F64, maths::acos64),
+    real_fn!("ATAN", [ValReal32], F32, maths::atan32),
+    real_fn!("DATAN", [ValReal64], F64, maths::atan64),
+    real_fn!("ATAN2", [ValReal32, ValReal32], F32, maths::atan2_32),
+    real_fn!("DATAN2", [ValReal64, ValReal64], F64, maths::atan2_64),
+    real_fn!("SINH", [ValReal32], F32, maths::sinh32),
+    real_fn!("DSINH", [ValReal64], F64, maths::sinh64),
+    real_fn!("COSH", [ValReal32], F32, maths::cosh32),
+    real_fn!("DCOSH", [ValReal64], F64, maths::cosh64),
+    real_fn!("TANH", [ValReal32], F32, maths::tanh32),
+    real_fn!("DTANH", [ValReal64], F64, maths::tanh64),
+    real_fn!("EXP", [ValReal32], F32, maths::exp32),
+    real_fn!("DEXP", [ValReal64], F64, maths::exp64),
+    real_fn!("ALOG", [ValReal32], F32, maths::ln32),
+    real_fn!("DALOG", [ValReal64], F64, maths::ln64),
+    real_fn!("ALOG10", [ValReal32], F32, maths::log10_32),
+    real_fn!("DALOG10", [ValReal64], F64, maths::log10_64),
+    real_fn!("POWER", [ValReal32, ValReal32], F32, maths::pow32),
+    real_fn!("DPOWER", [ValReal64, ValReal64], F64, maths::pow64),
     Intrinsic {
         name: "INTTOSTRING",
         params: &[ResultInt, VarBytes, ValInt],
         result: None,
-        addr: int_to_string as *const u8,
+        addr: strings::int_to_string as *const u8,
     },
     Intrinsic {
         name: "REAL64TOSTRING",
         params: &[ResultInt, VarBytes, ValReal64, ValInt, ValInt],
         result: None,
-        addr: real64_to_string as *const u8,
+        addr: strings::real64_to_string as *const u8,
     },
-    Intrinsic {
-        name: "SUM.REAL64",
-        params: &[ValReal64s],
-        result: Some(MachineType::F64),
-        addr: sum_real64 as *const u8,
-    },
+    real_fn!("SUM.REAL64", [ValReal64s], F64, strings::sum_real64),
 ];
 
 /// Finds an intrinsic by occam name.
 pub fn intrinsic(name: &str) -> Option<&'static Intrinsic> {
     INTRINSICS.iter().find(|i| i.name == name)
-}
-
-extern "C" fn sqrt32(x: f32) -> f32 {
-    x.sqrt()
-}
-
-extern "C" fn sqrt64(x: f64) -> f64 {
-    x.sqrt()
-}
-
-extern "C" fn sin64(x: f64) -> f64 {
-    x.sin()
-}
-
-extern "C" fn cos64(x: f64) -> f64 {
-    x.cos()
-}
-
-extern "C" fn exp64(x: f64) -> f64 {
-    x.exp()
-}
-
-extern "C" fn ln64(x: f64) -> f64 {
-    x.ln()
-}
-
-extern "C" fn pow64(x: f64, y: f64) -> f64 {
-    x.powf(y)
-}
-
-extern "C" fn atan2_64(y: f64, x: f64) -> f64 {
-    y.atan2(x)
-}
-
-/// Writes `text` into the byte array (`ptr`, `cap`) and its length into `*len`; if it does not
-/// fit, `*len` is -1 and the array is untouched.
-///
-/// # Safety
-/// `len` is a valid INT; `ptr` valid for `cap` bytes.
-unsafe fn put_string(len: *mut Word, ptr: *mut u8, cap: Word, text: &str) {
-    let n = text.len();
-    // SAFETY: caller contract.
-    unsafe {
-        if n as Word > cap {
-            *len = -1;
-            return;
-        }
-        std::ptr::copy_nonoverlapping(text.as_ptr(), ptr, n);
-        *len = n as Word;
-    }
-}
-
-/// `INTTOSTRING (RESULT INT len, []BYTE string, VAL INT n)`: decimal digits of `n`.
-///
-/// # Safety
-/// As for [`put_string`].
-unsafe extern "C" fn int_to_string(len: *mut Word, ptr: *mut u8, cap: Word, n: Word) {
-    // SAFETY: forwarded contract.
-    unsafe { put_string(len, ptr, cap, &n.to_string()) }
-}
-
-/// `REAL64TOSTRING (RESULT INT len, []BYTE string, VAL REAL64 x, VAL INT Ip, Dp)`: with
-/// `Ip = Dp = 0` the shortest decimal that reads back as `x`; otherwise fixed point with `Dp`
-/// decimals (`Ip` is not used for padding).
-///
-/// # Safety
-/// As for [`put_string`].
-unsafe extern "C" fn real64_to_string(
-    len: *mut Word,
-    ptr: *mut u8,
-    cap: Word,
-    x: f64,
-    ip: Word,
-    dp: Word,
-) {
-    let text = if ip == 0 && dp == 0 {
-        format!("{x:?}")
-    } else {
-        format!("{x:.prec$}", prec = dp.clamp(0, 30) as usize)
-    };
-    // SAFETY: forwarded contract.
-    unsafe { put_string(len, ptr, cap, &text) }
-}
-
-/// `REAL64 FUNCTION SUM.REAL64 (VAL []REAL64 xs)`: the sum of the elements.
-///
-/// # Safety
-/// `ptr` valid for `n` REAL64s.
-unsafe extern "C" fn sum_real64(ptr: *const f64, n: Word) -> f64 {
-    if n <= 0 {
-        return 0.0;
-    }
-    // SAFETY: caller contract.
-    unsafe { std::slice::from_raw_parts(ptr, n as usize) }
-        .iter()
-        .sum()
 }
 
 #[cfg(test)]
