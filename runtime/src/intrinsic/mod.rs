@@ -13,8 +13,6 @@
 //! The occam side declares them in `stdlib/` (for example `REAL64 FUNCTION DSQRT (VAL REAL64 x)`)
 //! and codegen calls them directly instead of compiling a body.
 
-use crate::abi::Word;
-
 mod maths;
 mod strings;
 
@@ -175,6 +173,7 @@ pub fn intrinsic(name: &str) -> Option<&'static Intrinsic> {
 #[cfg(test)]
 mod test {
     use super::*;
+    use crate::abi::Word;
 
     #[test]
     fn scalar_intrinsics_through_their_addresses() {
