@@ -317,3 +317,70 @@ fn pri_par_preempts_a_busy_low_process() {
         "the high process ran while the low one was busy"
     );
 }
+
+/// A high branch that runs a PAR of one child (started with rt_startp: inherits high priority),
+/// then logs its tag and ends. Its own frame is branch-shaped; the child frame sits above it.
+unsafe extern "C" fn high_parent_branch(ws: Wptr, node: *mut Node) -> Status {
+    const J: usize = B_WORDS; // join block after the branch locals
+    unsafe {
+        let child = ws.add(J + 2 + slot::HEADER_WORDS);
+        if iptr(ws) == 0 {
+            *ws.add(J).offset(join::PARENT) = 0;
+            *ws.add(J).offset(join::COUNT) = 1;
+            *l(child, B_JOIN) = ws.add(J) as Word;
+            *l(child, B_LOG) = *l(ws, B_LOG);
+            *l(child, B_TAG) = 1;
+            rt_startp(node, ws, child, tag_branch, 0);
+            set_iptr(ws, 1);
+            check!(rt_par_wait(node, ws, ws.add(J)));
+        }
+        log(ws, 2);
+        rt_endp(node, ws, *l(ws, B_JOIN) as *mut Word)
+    }
+}
+
+#[test]
+fn startp_inherits_the_priority_of_the_starting_process() {
+    const BIG: usize = STRIDE + 2 + slot::HEADER_WORDS + B_WORDS;
+    unsafe extern "C" fn launcher2(ws: Wptr, node: *mut Node) -> Status {
+        unsafe {
+            let low = ws.add(P_BRANCHES + slot::HEADER_WORDS);
+            let high = low.add(STRIDE + slot::HEADER_WORDS);
+            if iptr(ws) == 0 {
+                *ws.offset(join::PARENT) = 0;
+                *ws.offset(join::COUNT) = 2;
+                for b in [low, high] {
+                    *l(b, B_JOIN) = ws as Word;
+                    *l(b, B_LOG) = *l(ws, P_LOG);
+                }
+                *l(low, B_TAG) = 3;
+                rt_startp(node, ws, low, tag_branch, 0);
+                set_iptr(ws, 1);
+                check!(rt_startp_pri(
+                    node,
+                    ws,
+                    high,
+                    high_parent_branch,
+                    0,
+                    priority::HIGH
+                ));
+            }
+            if iptr(ws) == 1 {
+                set_iptr(ws, 2);
+                check!(rt_par_wait(node, ws, ws));
+            }
+            (*(*l(ws, P_LOG) as *mut Vec<Word>)).push(100);
+            Status::DONE
+        }
+    }
+    let (mut node, _) = node();
+    let mut log: Vec<Word> = Vec::new();
+    let ws = node.alloc_workspace(P_BRANCHES + 2 * BIG).unwrap();
+    unsafe {
+        *l(ws, P_LOG) = &mut log as *mut Vec<Word> as Word;
+        node.spawn(ws, launcher2);
+    }
+    node.run().unwrap();
+    // The high branch's child (1) is high too: it runs before the low branch (3) queued earlier.
+    assert_eq!(log, vec![1, 2, 3, 100]);
+}

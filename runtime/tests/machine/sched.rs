@@ -114,3 +114,11 @@ fn absurd_workspace_sizes_are_errors_not_panics() {
         ));
     }
 }
+
+#[test]
+fn nodes_can_move_between_threads() {
+    fn assert_send<T: Send>() {}
+    assert_send::<Node>();
+    assert_send::<Box<Node>>();
+    assert_send::<occ_runtime::Network>();
+}

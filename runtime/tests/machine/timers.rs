@@ -167,3 +167,22 @@ fn timer_guard_already_past_is_ready_at_once() {
     node.run().unwrap();
     assert_eq!(out.0, 1);
 }
+
+#[test]
+fn pri_alt_prefers_the_ready_channel_over_an_expired_timer_before_it_in_order() {
+    let (mut node, _) = node();
+    let mut c = channel();
+    let mut out: (Word, Word) = (-1, -1);
+    let chan = &mut *c as *mut Word as Word;
+    // The sender is already waiting and the timer has expired: both guards are ready; the
+    // channel is disabled first, so it wins.
+    spawn(&mut node, late_sender, 3, &[chan, 5, -100]);
+    spawn(
+        &mut node,
+        timed_alter,
+        7,
+        &[chan, -10, 0, &mut out as *mut _ as Word],
+    );
+    node.run().unwrap();
+    assert_eq!(out.0, 0);
+}
