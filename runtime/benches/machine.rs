@@ -14,7 +14,7 @@
 
 use std::time::Duration;
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{Criterion, criterion_group};
 use occ_runtime::abi::{ProcFn, Status, Word, Wptr, join, slot};
 use occ_runtime::alt::{rt_alt, rt_altend, rt_altwt, rt_disc, rt_enbc};
 use occ_runtime::chan::{rt_in, rt_out};
@@ -444,4 +444,27 @@ fn bench_alt_and_processes(c: &mut Criterion) {
 }
 
 criterion_group!(benches, bench_commstime, bench_alt_and_processes);
-criterion_main!(benches);
+
+/// With `OCC_BENCH_ONCE=<name>:<loops>` (name: seq, par, alt, start), runs that benchmark once
+/// and exits, for instruction counting under `valgrind --tool=callgrind`; otherwise criterion.
+fn main() {
+    if let Some((name, loops)) = std::env::var("OCC_BENCH_ONCE")
+        .ok()
+        .and_then(|v| {
+            v.split_once(':')
+                .map(|(a, b)| (a.to_string(), b.parse::<u64>().ok()))
+        })
+        .and_then(|(a, b)| b.map(|b| (a, b)))
+    {
+        let t = match name.as_str() {
+            "seq" => commstime(loops, seq_delta, 6),
+            "par" => commstime(loops, par_delta, PAR_DELTA_WORDS),
+            "alt" => two_guard_alt(loops),
+            _ => start_end(loops),
+        };
+        println!("{name}: {:.1} ns/loop", t.as_nanos() as f64 / loops as f64);
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

@@ -39,14 +39,30 @@ use crate::node::Node;
 /// Both ranges are valid for `len` bytes and do not overlap (they belong to two processes).
 #[inline(always)]
 pub(crate) unsafe fn copy(src: *const u8, dst: *mut u8, len: Word) {
-    // SAFETY: caller contract; the 8-byte case avoids a memcpy call for INT-sized messages.
+    // SAFETY: caller contract; word, INT32 and BYTE messages avoid a memcpy call.
     unsafe {
-        if len == 8 {
-            dst.cast::<u64>()
-                .write_unaligned(src.cast::<u64>().read_unaligned());
-        } else if len > 0 {
-            std::ptr::copy_nonoverlapping(src, dst, len as usize);
+        match len {
+            8 => dst
+                .cast::<u64>()
+                .write_unaligned(src.cast::<u64>().read_unaligned()),
+            4 => dst
+                .cast::<u32>()
+                .write_unaligned(src.cast::<u32>().read_unaligned()),
+            1 => *dst = *src,
+            _ => copy_bytes(src, dst, len),
         }
+    }
+}
+
+/// The general case of [`copy`], out of line to keep the channel entries small.
+///
+/// # Safety
+/// As for [`copy`].
+#[inline(never)]
+unsafe fn copy_bytes(src: *const u8, dst: *mut u8, len: Word) {
+    if len > 0 {
+        // SAFETY: caller contract.
+        unsafe { std::ptr::copy_nonoverlapping(src, dst, len as usize) };
     }
 }
 
@@ -87,16 +103,17 @@ pub unsafe extern "C" fn rt_in(
     }
     if w & tag::EXTERNAL != 0 {
         // SAFETY: an EXTERNAL word always points at one of this node's endpoints.
-        return unsafe { node.external_in(ws, chan, w, data, len) };
+        return unsafe { in_external(node, ws, chan, w, data, len) };
     }
     // SAFETY: an outputter is parked in the word; its POINTER slot is valid for `len` bytes.
     unsafe {
-        copy(get(wptr(w), slot::POINTER) as *const u8, data, len);
-        *chan = NOT_PROCESS;
+        let src = get(wptr(w), slot::POINTER) as *const u8;
+        if matches!(len, 1 | 4 | 8) {
+            complete(node, ws, chan, w, src, data, len)
+        } else {
+            complete_any(node, ws, chan, w, src, data, len)
+        }
     }
-    node.stats.communications += 1;
-    node.schedule(w);
-    node.continue_or_preempt(ws)
 }
 
 /// Output `len` bytes from `data` to channel `chan` (T800 `out`). Blocking point.
@@ -119,26 +136,105 @@ pub unsafe extern "C" fn rt_out(
         unsafe { park(node, ws, chan, data, what) };
         return Status::BLOCKED;
     }
-    if w & tag::EXTERNAL != 0 {
-        // SAFETY: an EXTERNAL word always points at one of this node's endpoints.
-        return unsafe { node.external_out(ws, chan, w, data, len) };
-    }
-    if w & tag::ALT != 0 {
-        // SAFETY: the reader is ALTing and enabled this channel; it is a live frame.
-        unsafe {
-            park(node, ws, chan, data, what);
-            node.alt_guard_ready(w);
-        }
-        return Status::BLOCKED;
+    if w & (tag::EXTERNAL | tag::ALT) != 0 {
+        // SAFETY: the word is an endpoint or an ALTing reader of this node.
+        return unsafe { out_special(node, ws, chan, w, data, len) };
     }
     // SAFETY: an inputter is parked in the word; its POINTER slot is valid for `len` bytes.
     unsafe {
-        copy(data, get(wptr(w), slot::POINTER) as *mut u8, len);
+        let dst = get(wptr(w), slot::POINTER) as *mut u8;
+        if matches!(len, 1 | 4 | 8) {
+            complete(node, ws, chan, w, data, dst, len)
+        } else {
+            complete_any(node, ws, chan, w, data, dst, len)
+        }
+    }
+}
+
+/// The second party's half of a communication: copy, empty the channel, requeue the first party
+/// (`w`) at the back of its queue, and carry on unless preempted.
+///
+/// # Safety
+/// `w` is the parked partner's descriptor; `src`/`dst` valid for `len` bytes.
+#[inline(always)]
+unsafe fn complete(
+    node: &mut Node,
+    ws: Wptr,
+    chan: *mut Word,
+    w: Word,
+    src: *const u8,
+    dst: *mut u8,
+    len: Word,
+) -> Status {
+    // SAFETY: caller contract.
+    unsafe {
+        copy(src, dst, len);
         *chan = NOT_PROCESS;
     }
     node.stats.communications += 1;
     node.schedule(w);
     node.continue_or_preempt(ws)
+}
+
+/// [`complete`] for message lengths other than 1, 4 and 8 bytes, out of line so that the
+/// common entries make no call.
+///
+/// # Safety
+/// As for [`complete`].
+#[inline(never)]
+unsafe fn complete_any(
+    node: &mut Node,
+    ws: Wptr,
+    chan: *mut Word,
+    w: Word,
+    src: *const u8,
+    dst: *mut u8,
+    len: Word,
+) -> Status {
+    // SAFETY: forwarded contract.
+    unsafe { complete(node, ws, chan, w, src, dst, len) }
+}
+
+/// `rt_in` on an external channel, out of line (a call keeps the common path a leaf).
+///
+/// # Safety
+/// As for [`rt_in`]; `w` is the channel's EXTERNAL-tagged word.
+#[inline(never)]
+unsafe fn in_external(
+    node: &mut Node,
+    ws: Wptr,
+    chan: *mut Word,
+    w: Word,
+    data: *mut u8,
+    len: Word,
+) -> Status {
+    // SAFETY: caller contract.
+    unsafe { node.external_in(ws, chan, w, data, len) }
+}
+
+/// `rt_out` on an external channel or to an ALTing reader, out of line.
+///
+/// # Safety
+/// As for [`rt_out`]; `w` is EXTERNAL- or ALT-tagged.
+#[inline(never)]
+unsafe fn out_special(
+    node: &mut Node,
+    ws: Wptr,
+    chan: *mut Word,
+    w: Word,
+    data: *mut u8,
+    len: Word,
+) -> Status {
+    if w & tag::EXTERNAL != 0 {
+        // SAFETY: an EXTERNAL word always points at one of this node's endpoints.
+        return unsafe { node.external_out(ws, chan, w, data, len) };
+    }
+    // SAFETY: the reader is ALTing and enabled this channel; it is a live frame.
+    unsafe {
+        park(node, ws, chan, data, chan as Word | wait::OUTPUT);
+        node.alt_guard_ready(w);
+    }
+    Status::BLOCKED
 }
 
 impl Node {

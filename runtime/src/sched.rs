@@ -67,17 +67,14 @@ impl Node {
         Some(ws)
     }
 
-    /// Whether a high-priority frame is waiting to run.
-    #[inline]
-    pub(crate) fn high_ready(&self) -> bool {
-        !self.queues[0].front.is_null() || (self.handoff != 0 && pri(self.handoff) == 0)
-    }
-
     /// Ends a runtime entry that may have woken a high-priority process: a low-priority caller
     /// is preempted into the interrupted slot (its `IPTR` already holds the after-op index).
-    #[inline]
+    ///
+    /// (The hand-off slot is always empty here: it is only set by `rt_endp`, after which the
+    /// ending branch makes no further runtime call.)
+    #[inline(always)]
     pub(crate) fn continue_or_preempt(&mut self, ws: Wptr) -> Status {
-        if self.cur_pri == priority::LOW && self.high_ready() {
+        if self.cur_pri == priority::LOW && !self.queues[0].front.is_null() {
             self.interrupted = ws;
             return Status::BLOCKED;
         }
