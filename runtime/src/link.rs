@@ -144,6 +144,29 @@ impl Network {
     }
 }
 
+impl Network {
+    /// Runs every node on its own OS thread until all have stopped; returns each node with its
+    /// outcome, in the order given. (A pool with fewer threads than nodes needs nodes that yield
+    /// their thread when idle: not yet implemented.)
+    pub fn run_all(nodes: Vec<Box<Node>>) -> Vec<(Box<Node>, Result<(), RunError>)> {
+        std::thread::scope(|s| {
+            let handles: Vec<_> = nodes
+                .into_iter()
+                .map(|mut node| {
+                    s.spawn(move || {
+                        let r = node.run();
+                        (node, r)
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+                .collect()
+        })
+    }
+}
+
 impl Node {
     /// Output on a link.
     ///

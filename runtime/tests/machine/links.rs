@@ -172,3 +172,81 @@ fn alt_on_a_link_input_is_woken_by_the_remote_writer() {
     assert_eq!(sel, 0, "the link guard was selected");
     assert!(waited < 4_000_000, "the timer did not fire ({waited} µs)");
 }
+
+/// Ring member on its own node: inputs from local 1, adds 1, outputs on local 0; `n` times.
+/// The first node starts by outputting. Locals: 0 out, 1 in, 2 n, 3 i, 4 buffer, 5 first.
+unsafe extern "C" fn ring_node(ws: Wptr, node: *mut Node) -> Status {
+    unsafe {
+        loop {
+            match iptr(ws) {
+                0 => {
+                    *l(ws, 3) = 0;
+                    set_iptr(ws, if *l(ws, 5) != 0 { 2 } else { 1 });
+                }
+                1 => {
+                    if *l(ws, 3) == *l(ws, 2) {
+                        return Status::DONE;
+                    }
+                    set_iptr(ws, 2);
+                    check!(rt_in(node, ws, *l(ws, 1) as *mut Word, l(ws, 4).cast(), 8));
+                }
+                2 => {
+                    *l(ws, 4) += 1;
+                    set_iptr(ws, 3);
+                    check!(rt_out(node, ws, *l(ws, 0) as *mut Word, l(ws, 4).cast(), 8));
+                }
+                3 => {
+                    *l(ws, 3) += 1;
+                    if *l(ws, 5) != 0 {
+                        // The first node inputs the token back after each output.
+                        set_iptr(ws, 4);
+                        check!(rt_in(node, ws, *l(ws, 1) as *mut Word, l(ws, 4).cast(), 8));
+                    }
+                    set_iptr(ws, 1);
+                }
+                _ => {
+                    if *l(ws, 3) == *l(ws, 2) {
+                        return Status::DONE;
+                    }
+                    set_iptr(ws, 2);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_ring_of_eight_nodes_passes_a_token() {
+    const NODES: usize = 8;
+    const ROUNDS: Word = 50;
+    let net = Network::new();
+    let mut nodes: Vec<Box<Node>> = (0..NODES).map(|_| node().0).collect();
+    for n in nodes.iter_mut() {
+        net.join(n);
+    }
+    let mut ends = Vec::new(); // (out of i, in of i+1)
+    for i in 0..NODES {
+        let (a, b) = nodes.split_at_mut(i.max((i + 1) % NODES));
+        let (from, to) = if i + 1 < NODES {
+            (&mut a[i], &mut b[0])
+        } else {
+            (&mut b[0], &mut a[0])
+        };
+        ends.push(net.connect(from, to, &format!("{i}->{}", (i + 1) % NODES)));
+    }
+    let mut first_ws = 0usize;
+    for (i, n) in nodes.iter_mut().enumerate() {
+        let out = ends[i].0 as Word;
+        let inp = ends[(i + NODES - 1) % NODES].1 as Word;
+        let ws = spawn(n, ring_node, 6, &[out, inp, ROUNDS, 0, 0, (i == 0) as Word]);
+        if i == 0 {
+            first_ws = ws as usize;
+        }
+    }
+    let results = Network::run_all(nodes);
+    for (_, r) in &results {
+        assert!(r.is_ok(), "{r:?}");
+    }
+    // Each of the 8 nodes adds 1 per round.
+    unsafe { assert_eq!(*l(first_ws as Wptr, 4), NODES as Word * ROUNDS) };
+}
