@@ -1,7 +1,8 @@
 //! Host I/O: the top-level PROC's `keyboard`, `screen` and `error` byte channels.
 //!
 //! The three channels are external endpoints ([`crate::Node::host_channels`]): output on `screen`
-//! or `error` appends to a buffered writer and completes at once; input on `keyboard` flushes the
+//! or `error` appends to a buffered writer and completes at once (the byte [`FLUSH`] flushes
+//! instead); input on `keyboard` flushes the
 //! screen, then reads from the host's input (blocking the node's thread, like KRoC's blocking
 //! keyboard process). At end of input the keyboard delivers byte 255 ([`END_OF_INPUT`]), and
 //! again on every later read. Output is flushed when the node stops, in every case.
@@ -19,6 +20,10 @@ pub enum HostStream {
 
 /// The byte delivered by `keyboard` at end of input.
 pub const END_OF_INPUT: u8 = 255;
+
+/// The byte that, sent to `screen` or `error`, flushes it instead of being written (the course
+/// library's `FLUSH`).
+pub const FLUSH: u8 = 255;
 
 /// The host streams a node's host channels are bound to.
 pub struct HostIo {
@@ -56,15 +61,25 @@ impl HostIo {
         )
     }
 
-    /// Writes `bytes` to `stream`. Error output is flushed at once.
+    /// Writes `bytes` to `stream`; a [`FLUSH`] byte is not written but flushes the stream (as
+    /// KRoC's screen process does for the course library's `flush`). Error output is flushed at
+    /// once.
     pub(crate) fn write(&mut self, stream: HostStream, bytes: &[u8]) -> std::io::Result<()> {
-        match stream {
-            HostStream::Screen => self.screen.write_all(bytes),
-            HostStream::Error => {
-                self.error.write_all(bytes)?;
-                self.error.flush()
+        let w = match stream {
+            HostStream::Screen => &mut self.screen,
+            HostStream::Error => &mut self.error,
+        };
+        let mut parts = bytes.split(|&b| b == FLUSH).peekable();
+        while let Some(part) = parts.next() {
+            w.write_all(part)?;
+            if parts.peek().is_some() {
+                w.flush()?;
             }
         }
+        if stream == HostStream::Error {
+            w.flush()?;
+        }
+        Ok(())
     }
 
     /// Fills `buf` from the input (flushing the screen first); [`END_OF_INPUT`] past the end.

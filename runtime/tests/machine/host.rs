@@ -101,3 +101,42 @@ fn alt_on_the_keyboard() {
         assert_eq!(*l(ws, 1), b'x' as Word);
     }
 }
+
+/// Outputs the bytes of local 1.. (count in local 2) one at a time on the screen (local 0).
+unsafe extern "C" fn put_bytes(ws: Wptr, node: *mut Node) -> Status {
+    unsafe {
+        loop {
+            match iptr(ws) {
+                0 => {
+                    *l(ws, 3) = 0;
+                    set_iptr(ws, 1);
+                }
+                _ => {
+                    if *l(ws, 3) == *l(ws, 2) {
+                        return Status::DONE;
+                    }
+                    let p = (*l(ws, 1) as *const u8).add(*l(ws, 3) as usize);
+                    *l(ws, 4) = *p as Word;
+                    *l(ws, 3) += 1;
+                    set_iptr(ws, 1);
+                    check!(rt_out(node, ws, *l(ws, 0) as *mut Word, l(ws, 4).cast(), 1));
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn flush_byte_flushes_instead_of_printing() {
+    let (mut node, screen) = node();
+    let [_, scr, _] = node.host_channels();
+    let text = [b'a', b'b', occ_runtime::host::FLUSH, b'c'];
+    spawn(
+        &mut node,
+        put_bytes,
+        5,
+        &[scr as Word, text.as_ptr() as Word, 4],
+    );
+    node.run().unwrap();
+    assert_eq!(screen.text(), "abc");
+}
