@@ -65,19 +65,21 @@ impl ErrorKind {
         usize::try_from(code).ok().and_then(|i| ALL.get(i).copied())
     }
 
-    /// A short description, used in messages.
+    /// A short description, used in messages. It contains the word the test corpus names the
+    /// kind by (`stop`, `bounds`, `conversion`, `overflow`, `division`, `assert`): an IF or CASE
+    /// with no way through is a STOP, as in KRoC.
     pub fn describe(self) -> &'static str {
         match self {
             ErrorKind::Stop => "STOP executed",
-            ErrorKind::IfNoBranch => "no condition of IF is true",
-            ErrorKind::CaseNoMatch => "no option of CASE matches",
-            ErrorKind::Subscript => "array subscript out of range",
-            ErrorKind::Segment => "array segment out of range",
+            ErrorKind::IfNoBranch => "STOP: no condition of IF is true",
+            ErrorKind::CaseNoMatch => "STOP: no option of CASE matches",
+            ErrorKind::Subscript => "array subscript out of bounds",
+            ErrorKind::Segment => "array segment out of bounds",
             ErrorKind::Conversion => "conversion out of range",
             ErrorKind::Overflow => "arithmetic overflow",
             ErrorKind::DivideByZero => "division by zero",
             ErrorKind::Shift => "shift count out of range",
-            ErrorKind::Assert => "assertion failed",
+            ErrorKind::Assert => "ASSERT failed",
             ErrorKind::MessageLength => "message length mismatch",
             ErrorKind::Host => "host I/O failed",
         }

@@ -16,7 +16,7 @@
 //! every node is idle (or finished) and no mail is in flight, no link can move and each waiting
 //! node reports a deadlock instead of waiting for ever.
 
-use std::sync::atomic::{AtomicUsize, Ordering::SeqCst};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering::SeqCst};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
@@ -61,11 +61,37 @@ impl Mailbox {
 }
 
 /// Counters shared by the nodes of one network.
+///
+/// `state` packs two counters into one word so that one load is a consistent snapshot: the
+/// number of idle (or finished) nodes in the low 32 bits, mail in flight in the high 32 bits.
+/// A node with mail decrements its idle count before the mail's in-flight count, and a node
+/// posting mail is not idle, so a snapshot with every node idle and nothing in flight is a
+/// deadlock.
 #[derive(Debug, Default)]
 pub(crate) struct NetState {
     nodes: AtomicUsize,
-    idle: AtomicUsize,
-    in_flight: AtomicUsize,
+    state: AtomicU64,
+}
+
+/// One idle node in [`NetState::state`].
+const IDLE: u64 = 1;
+/// One mail in flight in [`NetState::state`].
+const MAIL: u64 = 1 << 32;
+
+impl NetState {
+    fn add(&self, v: u64) {
+        self.state.fetch_add(v, SeqCst);
+    }
+
+    fn sub(&self, v: u64) {
+        self.state.fetch_sub(v, SeqCst);
+    }
+
+    /// Whether every node is idle or finished and no mail is in flight.
+    fn deadlocked(&self) -> bool {
+        let s = self.state.load(SeqCst);
+        s >> 32 == 0 && (s & (MAIL - 1)) as usize == self.nodes.load(SeqCst)
+    }
 }
 
 /// A set of nodes joined by links.
@@ -109,7 +135,7 @@ impl LinkEnd {
     }
 
     fn post(&self, to: &Mailbox, desc: Word) {
-        self.shared.net.in_flight.fetch_add(1, SeqCst);
+        self.shared.net.add(MAIL);
         to.post(desc);
     }
 }
@@ -286,7 +312,7 @@ impl Node {
             let mut mail = self.mailbox.lock();
             if let Some(i) = mail.iter().position(|&d| d == me) {
                 mail.remove(i);
-                end.shared.net.in_flight.fetch_sub(1, SeqCst);
+                end.shared.net.sub(MAIL);
                 self.link_waiters -= 1;
             }
         }
@@ -307,7 +333,7 @@ impl Node {
             }
         }
         if let Some(net) = &self.net {
-            net.in_flight.fetch_sub(mail.len(), SeqCst);
+            net.sub(MAIL * mail.len() as u64);
         }
     }
 
@@ -324,14 +350,14 @@ impl Node {
             self.mailbox.wait(d);
             return Ok(());
         }
-        net.idle.fetch_add(1, SeqCst);
+        net.add(IDLE);
         while !self.mailbox.wait(IDLE_POLL) {
-            if net.idle.load(SeqCst) == net.nodes.load(SeqCst) && net.in_flight.load(SeqCst) == 0 {
+            if net.deadlocked() {
                 self.net_finished = true;
                 return Err(RunError::Deadlock(self.deadlock_report()));
             }
         }
-        net.idle.fetch_sub(1, SeqCst);
+        net.sub(IDLE);
         Ok(())
     }
 
@@ -341,7 +367,7 @@ impl Node {
             && !self.net_finished
         {
             self.net_finished = true;
-            net.idle.fetch_add(1, SeqCst);
+            net.add(IDLE);
         }
     }
 }

@@ -36,7 +36,7 @@ fn runtime_error_names_file_line_kind_and_proc() {
     let err = node.run().expect_err("halts");
     assert_eq!(
         err.to_string(),
-        "arrays.occ:42: runtime error: array subscript out of range (in PROC index.it)"
+        "arrays.occ:42: runtime error: array subscript out of bounds (in PROC index.it)"
     );
     assert_eq!(ran, 0, "the node stops at once: no other process runs");
 }
@@ -47,6 +47,20 @@ fn every_error_kind_has_a_code_and_message() {
         let k = ErrorKind::from_code(code).expect("kind");
         assert_eq!(k as Word, code);
         assert!(!k.describe().is_empty());
+    }
+    // The words the test corpus (tests/lang/run) names kinds by.
+    for (k, word) in [
+        (ErrorKind::Stop, "stop"),
+        (ErrorKind::IfNoBranch, "stop"),
+        (ErrorKind::CaseNoMatch, "stop"),
+        (ErrorKind::Subscript, "bounds"),
+        (ErrorKind::Segment, "bounds"),
+        (ErrorKind::Conversion, "conversion"),
+        (ErrorKind::Overflow, "overflow"),
+        (ErrorKind::DivideByZero, "division"),
+        (ErrorKind::Assert, "assert"),
+    ] {
+        assert!(k.describe().to_lowercase().contains(word), "{k:?}");
     }
     assert_eq!(ErrorKind::from_code(12), None);
     assert_eq!(ErrorKind::from_code(-1), None);

@@ -197,12 +197,12 @@ unsafe extern "C" fn ring_node(ws: Wptr, node: *mut Node) -> Status {
                 }
                 3 => {
                     *l(ws, 3) += 1;
-                    if *l(ws, 5) != 0 {
-                        // The first node inputs the token back after each output.
-                        set_iptr(ws, 4);
-                        check!(rt_in(node, ws, *l(ws, 1) as *mut Word, l(ws, 4).cast(), 8));
-                    }
-                    set_iptr(ws, 1);
+                    // The first node inputs the token back after each output.
+                    set_iptr(ws, if *l(ws, 5) != 0 { 5 } else { 1 });
+                }
+                5 => {
+                    set_iptr(ws, 4);
+                    check!(rt_in(node, ws, *l(ws, 1) as *mut Word, l(ws, 4).cast(), 8));
                 }
                 _ => {
                     if *l(ws, 3) == *l(ws, 2) {
@@ -244,8 +244,12 @@ fn a_ring_of_eight_nodes_passes_a_token() {
         }
     }
     let results = Network::run_all(nodes);
+    let outcomes: Vec<String> = results
+        .iter()
+        .map(|(n, r)| format!("{r:?} comms={}", n.stats().communications))
+        .collect();
     for (_, r) in &results {
-        assert!(r.is_ok(), "{r:?}");
+        assert!(r.is_ok(), "{outcomes:#?}");
     }
     // Each of the 8 nodes adds 1 per round.
     unsafe { assert_eq!(*l(first_ws as Wptr, 4), NODES as Word * ROUNDS) };
