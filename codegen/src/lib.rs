@@ -1,2 +1,155 @@
-//! Native code generation for checked occam programs through Cranelift: each PROC becomes a resumable
-//! function over its workspace, driven by the `occ-runtime` scheduler.
+//! Native code generation for checked occam programs through Cranelift: each PROC (and each PAR
+//! branch) becomes a resumable function over its workspace, driven by the `occ-runtime`
+//! scheduler (see `occ_runtime::abi` for the contract).
+//!
+//! Pipeline: [`compile`] walks the checked AST ([`lower`]) with frames laid out by [`frame`] and
+//! values typed by [`layout`], defines the functions in one JIT module ([`jit`]) and returns a
+//! [`Compiled`] program; [`Compiled::run`] runs its entry PROC on a fresh node with the three
+//! host byte channels.
+
+#![deny(missing_docs)]
+
+pub mod error;
+pub mod frame;
+pub mod jit;
+pub mod layout;
+pub mod lower;
+
+use std::sync::Arc;
+
+use occ_compiler::CheckedProgram;
+use occ_compiler::types::{ChanProtocol, Prim, ProtocolItem, Type};
+use occ_grammar::ast::{self, DeclKind};
+use occ_grammar::source_map::SourceMap;
+use occ_runtime::abi::{ProcFn, Word};
+use occ_runtime::program::ProcInfo;
+use occ_runtime::{HostIo, Node, NodeConfig, ProgramInfo, RunError, Stats};
+
+pub use error::CodegenError;
+use lower::{Compiler, Storage};
+
+/// A compiled program: native code, constant data and the runtime's tables.
+pub struct Compiled {
+    module: Option<cranelift_jit::JITModule>,
+    _data: Vec<Box<[u8]>>,
+    /// The entry PROC's code.
+    pub entry: ProcFn,
+    /// The entry PROC's name.
+    pub entry_name: String,
+    /// Words of workspace the entry PROC needs above Wptr.
+    pub entry_words: u32,
+    /// Byte offsets of the entry PROC's channel parameters in its frame.
+    pub entry_params: Vec<i32>,
+    /// Tables for error and deadlock reports.
+    pub info: Arc<ProgramInfo>,
+}
+
+impl Drop for Compiled {
+    fn drop(&mut self) {
+        if let Some(m) = self.module.take() {
+            // SAFETY: no node runs this program's code any more: nodes borrow `self` in `run`.
+            unsafe { m.free_memory() };
+        }
+    }
+}
+
+/// Compiles `program` (checked as `checked`, spans mapped by `map`); the entry point is its last
+/// top-level PROC, which must take up to three `CHAN BYTE` parameters (keyboard, screen, error).
+pub fn compile(
+    program: &ast::Program,
+    checked: &CheckedProgram,
+    map: &SourceMap,
+) -> Result<Compiled, CodegenError> {
+    let mut cx = Compiler::new(checked, map)?;
+    let mut entry = None;
+    for d in &program.decls {
+        match &d.kind {
+            DeclKind::Proc { name, .. } => {
+                cx.compile_proc(d, 1)?;
+                entry = Some(name);
+            }
+            DeclKind::Function { name, .. } => {
+                let sym = cx.symbol(name)?;
+                cx.env
+                    .insert(sym, Storage::Function(std::rc::Rc::new(d.clone())));
+            }
+            DeclKind::Abbrev { name, .. } => {
+                let sym = cx.symbol(name)?;
+                match &checked.symbols[sym].kind {
+                    occ_compiler::checked::SymbolKind::Val { value: Some(c) } => {
+                        cx.env.insert(sym, Storage::Const(c.clone()));
+                    }
+                    _ => return Err(cx.unsupported(d.span, "a non-constant top-level abbreviation")),
+                }
+            }
+            DeclKind::DataType { .. } | DeclKind::Protocol { .. } => {}
+            _ => return Err(cx.unsupported(d.span, "this top-level declaration")),
+        }
+    }
+    let name = entry.ok_or(CodegenError::NoEntry)?;
+    let sym = cx.symbol(name)?;
+    let Some(Storage::Proc(e)) = cx.env.get(&sym).cloned() else {
+        return Err(CodegenError::NoEntry);
+    };
+    if e.params.len() > 3 || !e.param_types.iter().all(is_byte_chan) {
+        return Err(CodegenError::BadEntry(name.text.clone()));
+    }
+    cx.jit.finalize()?;
+    let mut info = std::mem::take(&mut cx.info);
+    for (id, pname, resumes) in &cx.funcs {
+        let code = cx.jit.module.get_finalized_function(*id);
+        // SAFETY: every compiled function has the ProcFn signature.
+        let f: ProcFn = unsafe { std::mem::transmute::<*const u8, ProcFn>(code) };
+        let mut p = ProcInfo::new(pname, f);
+        p.resume_locations = resumes.clone();
+        info.procs.push(p);
+    }
+    let code = cx.jit.module.get_finalized_function(e.id);
+    // SAFETY: as above.
+    let entry_fn: ProcFn = unsafe { std::mem::transmute::<*const u8, ProcFn>(code) };
+    let Compiler { jit, data, .. } = cx;
+    Ok(Compiled {
+        module: Some(jit.module),
+        _data: data,
+        entry: entry_fn,
+        entry_name: name.text.clone(),
+        entry_words: e.frame_words,
+        entry_params: e.params.iter().map(|p| p.0).collect(),
+        info: Arc::new(info),
+    })
+}
+
+fn is_byte_chan(t: &Type) -> bool {
+    match t {
+        Type::Chan(p, _) => matches!(
+            **p,
+            ChanProtocol::Simple(ProtocolItem::Data(Type::Prim(Prim::Byte))) | ChanProtocol::Any
+        ),
+        _ => false,
+    }
+}
+
+impl Compiled {
+    /// Runs the entry PROC on a new node with `host` bound to its channels; returns the outcome
+    /// and the node's counters.
+    pub fn run(&self, config: NodeConfig, host: HostIo) -> (Result<(), RunError>, Stats) {
+        let mut node = Node::new(config, self.info.clone(), host);
+        let chans = node.host_channels();
+        let ws = match node.alloc_workspace(self.entry_words as usize + 2) {
+            Ok(ws) => ws,
+            Err(e) => return (Err(e), node.stats().clone()),
+        };
+        // SAFETY: `ws` has `entry_words` words above it and the header below; the parameter
+        // offsets are inside the frame.
+        unsafe {
+            *ws = 0;
+            *ws.add(1) = 0;
+            for (off, ch) in self.entry_params.iter().zip(chans) {
+                *ws.add(*off as usize / 8) = ch as Word;
+            }
+            node.spawn(ws, self.entry);
+        }
+        let r = node.run();
+        (r, node.stats().clone())
+    }
+}

@@ -1,0 +1,265 @@
+//! PROC declarations and calls (frame chain), FUNCTION calls (expanded inline: FUNCTIONs cannot
+//! block), VALOF, and calls of native intrinsics.
+
+use cranelift_codegen::ir::{InstBuilder, Value, types};
+use cranelift_module::Module;
+use occ_compiler::checked::SymbolKind;
+use occ_compiler::types::Type;
+use occ_grammar::ast::{Decl, DeclKind, Expr, FunctionBody, Name, Param, ParamMode, Span, Valof};
+use occ_runtime::abi::slot;
+use occ_runtime::intrinsic::{self, ParamKind};
+
+use super::{Compiler, ProcEntry, Res, Storage, Tr, mem};
+use crate::frame::Frame;
+use crate::layout::{is_scalar, rank};
+
+impl<'p> Compiler<'p> {
+    /// Compiles PROC declaration `d` whose body is at lexical `depth`, and binds its name.
+    pub fn compile_proc(&mut self, d: &Decl, depth: u32) -> Res<()> {
+        let DeclKind::Proc {
+            name, params, body, ..
+        } = &d.kind
+        else {
+            return Err(self.internal(d.span, "not a PROC"));
+        };
+        let sym = self.symbol(name)?;
+        let mut frame = Frame::default();
+        let mut slots = Vec::new();
+        let mut types = Vec::new();
+        for p in params {
+            let (off, by_value, ty) = self.param_slot(p, &mut frame)?;
+            let psym = self.symbol(&p.name)?;
+            let st = if by_value {
+                Storage::Var { depth, offset: off }
+            } else {
+                Storage::Ref { depth, offset: off }
+            };
+            self.env.insert(psym, st);
+            slots.push((off, by_value));
+            types.push(ty);
+        }
+        let (id, words) = self.function(&name.text, depth, frame, d.span, |tr| {
+            tr.process(body)?;
+            let done = tr.iconst(0);
+            tr.ret(done);
+            Ok(())
+        })?;
+        let entry = ProcEntry {
+            id,
+            frame_words: words,
+            depth,
+            params: slots,
+            param_types: types,
+        };
+        self.env.insert(sym, Storage::Proc(entry));
+        Ok(())
+    }
+
+    fn param_slot(&mut self, p: &Param, frame: &mut Frame) -> Res<(i32, bool, Type)> {
+        let sym = self.symbol(&p.name)?;
+        let ty = self.checked.symbols[sym].ty.clone();
+        let by_value = p.mode == ParamMode::Val && is_scalar(&self.checked.types, &ty);
+        let words = if by_value { 1 } else { 1 + rank(&ty) };
+        Ok((frame.alloc(8 * words as i64), by_value, ty))
+    }
+}
+
+impl Tr<'_, '_> {
+    /// Lowers a PROC call.
+    pub fn call_proc(&mut self, name: &Name, args: &[Expr], span: Span) -> Res<()> {
+        let sym = self.cx.symbol(name)?;
+        let st = self.cx.env.get(&sym).cloned();
+        let entry = match st {
+            Some(Storage::Proc(e)) => e,
+            _ => {
+                if let Some(i) = intrinsic::intrinsic(&name.text) {
+                    self.call_intrinsic(i, args, span)?;
+                    return Ok(());
+                }
+                if let SymbolKind::Predefined(p) = &self.cx.checked.symbols[sym].kind {
+                    return self.predefined_proc(p.name, args, span);
+                }
+                return Err(self
+                    .cx
+                    .unsupported(span, format!("call of `{}`", name.text)));
+            }
+        };
+        // Evaluate the actuals first (they may need temporaries), then place the callee's
+        // workspace above everything allocated.
+        let mut stores: Vec<(i32, Vec<Value>)> = Vec::new();
+        for (i, a) in args.iter().enumerate() {
+            let (off, by_value) = entry.params[i];
+            if by_value {
+                stores.push((off, vec![self.expr(a)?]));
+            } else {
+                let l = self.place(a)?;
+                let mut vs = vec![l.addr];
+                let r = rank(&entry.param_types[i]);
+                for k in 0..r {
+                    let d = l.dims.get(k).copied().unwrap_or_else(|| self.iconst(0));
+                    vs.push(d);
+                }
+                stores.push((off, vs));
+            }
+        }
+        let cw_off = self.frame.sub_workspace(entry.frame_words);
+        let cw = self.local_addr(cw_off);
+        for (off, vs) in stores {
+            for (k, v) in vs.into_iter().enumerate() {
+                self.b.ins().store(mem(), v, cw, off + 8 * k as i32);
+            }
+        }
+        let link = self.frame_at(entry.depth - 1);
+        self.b.ins().store(mem(), link, cw, 0);
+        self.enter_frame(cw, entry.id);
+        self.call_native(entry.id, cw, span)
+    }
+
+    /// Fills in a callee frame's header: CODE, IPTR = 0, CALLER = ws, ROOT = ws[ROOT].
+    fn enter_frame(&mut self, cw: Value, id: cranelift_module::FuncId) {
+        let f = self.func_ref(id);
+        let code = self.b.ins().func_addr(types::I64, f);
+        self.store_slot_at(cw, slot::CODE, code);
+        let zero = self.iconst(0);
+        self.store_slot_at(cw, slot::IPTR, zero);
+        self.store_slot_at(cw, slot::CALLER, self.ws);
+        let root = self.load_slot(slot::ROOT);
+        self.store_slot_at(cw, slot::ROOT, root);
+    }
+
+    /// Lowers a FUNCTION call (inline expansion) and returns its results.
+    pub fn call_function(&mut self, name: &Name, args: &[Expr], span: Span) -> Res<Vec<Value>> {
+        let sym = self.cx.symbol(name)?;
+        if let Some(i) = intrinsic::intrinsic(&name.text) {
+            return self.call_intrinsic(i, args, span);
+        }
+        let d = match self.cx.env.get(&sym) {
+            Some(Storage::Function(d)) => d.clone(),
+            _ => {
+                if let SymbolKind::Predefined(p) = &self.cx.checked.symbols[sym].kind {
+                    return self.predefined_function(p.name, args, span);
+                }
+                // A conversion to a named type written `T (x)`.
+                if let SymbolKind::DataType(_) = &self.cx.checked.symbols[sym].kind
+                    && args.len() == 1
+                {
+                    return Ok(vec![self.expr(&args[0])?]);
+                }
+                return Err(self
+                    .cx
+                    .unsupported(span, format!("call of `{}`", name.text)));
+            }
+        };
+        let DeclKind::Function { params, body, .. } = &d.kind else {
+            return Err(self.cx.internal(span, "not a FUNCTION"));
+        };
+        let mark = self.frame.mark();
+        // Bind the formals to the actuals.
+        let mut binds = Vec::new();
+        for (p, a) in params.iter().zip(args) {
+            let psym = self.cx.symbol(&p.name)?;
+            let ty = self.cx.checked.symbols[psym].ty.clone();
+            if is_scalar(&self.cx.checked.types, &ty) {
+                binds.push((psym, None, Some(self.expr(a)?)));
+            } else {
+                binds.push((psym, Some(self.place(a)?), None));
+            }
+        }
+        for (psym, l, v) in binds {
+            match (l, v) {
+                (Some(l), _) => self.bind_ref(psym, &l),
+                (None, Some(v)) => {
+                    let off = self.frame.alloc(8);
+                    let a = self.local_addr(off);
+                    self.store_scalar(v, a);
+                    self.cx.env.insert(
+                        psym,
+                        Storage::Var {
+                            depth: self.depth,
+                            offset: off,
+                        },
+                    );
+                }
+                _ => {}
+            }
+        }
+        let out = match body {
+            FunctionBody::Is(es) => {
+                let mut out = Vec::new();
+                for e in es {
+                    out.push(self.expr(e)?);
+                }
+                out
+            }
+            FunctionBody::Valof(v) => self.valof(v)?,
+        };
+        self.frame.release(mark);
+        Ok(out)
+    }
+
+    /// Lowers a VALOF and returns its results (scalars).
+    pub fn valof(&mut self, v: &Valof) -> Res<Vec<Value>> {
+        self.in_expr += 1;
+        let mark = self.frame.mark();
+        let r = (|| {
+            for d in &v.decls {
+                self.decl(d)?;
+            }
+            self.process(&v.body)?;
+            let mut out = Vec::new();
+            for e in &v.results {
+                out.push(self.expr(e)?);
+            }
+            Ok(out)
+        })();
+        self.frame.release(mark);
+        self.in_expr -= 1;
+        r
+    }
+
+    /// Calls a native intrinsic with occam actuals.
+    fn call_intrinsic(
+        &mut self,
+        i: &'static intrinsic::Intrinsic,
+        args: &[Expr],
+        span: Span,
+    ) -> Res<Vec<Value>> {
+        let mut vals = Vec::new();
+        for (k, a) in i.params.iter().zip(args) {
+            match k {
+                ParamKind::ValInt | ParamKind::ValByte | ParamKind::ValBool => {
+                    let v = self.expr(a)?;
+                    vals.push(self.widen_i64(v, a));
+                }
+                ParamKind::ValReal32 | ParamKind::ValReal64 => vals.push(self.expr(a)?),
+                ParamKind::ValBytes | ParamKind::VarBytes | ParamKind::ValReal64s => {
+                    let l = self.place(a)?;
+                    vals.push(l.addr);
+                    vals.push(l.dims.first().copied().unwrap_or_else(|| self.iconst(0)));
+                }
+                ParamKind::ResultInt => {
+                    // The runtime writes a whole word; go through a temporary.
+                    let off = self.frame.alloc(8);
+                    let t = self.local_addr(off);
+                    vals.push(t);
+                }
+            }
+        }
+        let id = self.cx.jit.intrinsics[i.name];
+        let f = self.cx.jit.module.declare_func_in_func(id, self.b.func);
+        let c = self.b.ins().call(f, &vals);
+        // Copy word results back to their INT variables.
+        let mut vi = 0;
+        for (k, a) in i.params.iter().zip(args) {
+            if *k == ParamKind::ResultInt {
+                let w = self.b.ins().load(types::I64, mem(), vals[vi], 0);
+                let w = self.b.ins().ireduce(types::I32, w);
+                let l = self.place(a)?;
+                self.store_scalar(w, l.addr);
+            }
+            vi += k.machine().len();
+        }
+        let _ = span;
+        Ok(self.b.inst_results(c).to_vec())
+    }
+}

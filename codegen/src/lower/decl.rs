@@ -1,0 +1,151 @@
+//! Declarations: variables (channels cleared to empty), abbreviations, RETYPES, nested PROCs
+//! and FUNCTIONs; types and protocols need no code.
+
+use cranelift_codegen::ir::{InstBuilder, types};
+use occ_compiler::checked::SymbolKind;
+use occ_compiler::types::Type;
+use occ_grammar::ast::{AbbrevMode, Decl, DeclKind, Name};
+
+use super::{Loc, Res, Storage, Tr, mem};
+use crate::layout::{is_scalar, rank, size_of};
+
+impl Tr<'_, '_> {
+    /// Lowers declaration `d`: allocates and binds its names.
+    pub fn decl(&mut self, d: &Decl) -> Res<()> {
+        match &d.kind {
+            DeclKind::Var { names, .. } => names.iter().try_for_each(|n| self.var(n)),
+            DeclKind::Abbrev {
+                mode, name, value, ..
+            } => {
+                let sym = self.cx.symbol(name)?;
+                let s = &self.cx.checked.symbols[sym];
+                if let SymbolKind::Val { value: Some(c) } = &s.kind {
+                    self.cx.env.insert(sym, Storage::Const(c.clone()));
+                    return Ok(());
+                }
+                let ty = s.ty.clone();
+                match mode {
+                    AbbrevMode::Val if is_scalar(&self.cx.checked.types, &ty) => {
+                        let v = self.expr(value)?;
+                        let off = self.frame.alloc(8);
+                        let a = self.local_addr(off);
+                        self.store_scalar(v, a);
+                        self.bind(sym, off, false);
+                    }
+                    AbbrevMode::Initial => {
+                        let off = self.alloc_var(&ty, name)?;
+                        let a = self.local_addr(off);
+                        self.assign_to(a, &ty, &[], value)?;
+                        self.bind(sym, off, false);
+                    }
+                    _ => {
+                        let l = self.place(value)?;
+                        self.bind_ref(sym, &l);
+                    }
+                }
+                Ok(())
+            }
+            DeclKind::Retypes { name, value, .. } => {
+                let sym = self.cx.symbol(name)?;
+                let ty = self.cx.checked.symbols[sym].ty.clone();
+                let src = self.place(value)?;
+                let size = self.loc_size(&src, value.span)?;
+                let mut l = Loc {
+                    addr: src.addr,
+                    ty: ty.clone(),
+                    dims: Vec::new(),
+                };
+                let sd = crate::layout::static_dims(&ty);
+                let mut inner = 1i64;
+                for d in sd.iter().skip(1) {
+                    inner *= i64::from(d.unwrap_or(1));
+                }
+                let esz = size_of(&self.cx.checked.types, crate::layout::base_elem(&ty))
+                    .unwrap_or(1)
+                    * inner;
+                for (i, d) in sd.iter().enumerate() {
+                    let v = match d {
+                        Some(n) => self.iconst(i64::from(*n)),
+                        None if i == 0 => self.b.ins().udiv_imm_s(size, esz.max(1)),
+                        None => self.iconst(0),
+                    };
+                    l.dims.push(v);
+                }
+                self.bind_ref(sym, &l);
+                Ok(())
+            }
+            DeclKind::DataType { .. } | DeclKind::Protocol { .. } => Ok(()),
+            DeclKind::Proc { .. } => {
+                let depth = self.depth + 1;
+                let e = self.cx.compile_proc(d, depth)?;
+                Ok(e)
+            }
+            DeclKind::Function { name, .. } => {
+                let sym = self.cx.symbol(name)?;
+                self.cx.env.insert(sym, Storage::Function(std::rc::Rc::new(d.clone())));
+                Ok(())
+            }
+            DeclKind::Place { .. } => Err(self.cx.unsupported(d.span, "PLACE")),
+            DeclKind::Asm(_) => Err(self.cx.unsupported(d.span, "ASM / GUY blocks")),
+            #[allow(unreachable_patterns)]
+            _ => Err(self.cx.unsupported(d.span, "this declaration")),
+        }
+    }
+
+    fn alloc_var(&mut self, ty: &Type, name: &Name) -> Res<i32> {
+        let size = size_of(&self.cx.checked.types, ty).ok_or_else(|| {
+            self.cx
+                .internal(name.span, format!("`{}` has no static size", name.text))
+        })?;
+        Ok(self.frame.alloc(size))
+    }
+
+    fn var(&mut self, n: &Name) -> Res<()> {
+        let sym = self.cx.symbol(n)?;
+        let ty = self.cx.checked.symbols[sym].ty.clone();
+        let off = self.alloc_var(&ty, n)?;
+        if matches!(crate::layout::base_elem(&ty), Type::Chan(..)) {
+            // Channel words start empty.
+            let size = size_of(&self.cx.checked.types, &ty).unwrap_or(8);
+            let zero = self.iconst(0);
+            for i in 0..size / 8 {
+                let a = self.local_addr(off + (i * 8) as i32);
+                self.b.ins().store(mem(), zero, a, 0);
+            }
+        }
+        self.bind(sym, off, false);
+        Ok(())
+    }
+
+    fn bind(&mut self, sym: occ_compiler::checked::SymbolId, offset: i32, by_ref: bool) {
+        let st = if by_ref {
+            Storage::Ref {
+                depth: self.depth,
+                offset,
+            }
+        } else {
+            Storage::Var {
+                depth: self.depth,
+                offset,
+            }
+        };
+        self.cx.env.insert(sym, st);
+    }
+
+    /// Binds `sym` by reference to place `l` (address and dimension lengths in the frame).
+    pub fn bind_ref(&mut self, sym: occ_compiler::checked::SymbolId, l: &Loc) {
+        let words = 1 + rank(&l.ty).max(l.dims.len());
+        let off = self.frame.alloc(8 * words as i64);
+        let a = self.local_addr(off);
+        self.b.ins().store(mem(), l.addr, a, 0);
+        for (i, d) in l.dims.iter().enumerate() {
+            let d = if self.b.func.dfg.value_type(*d) == types::I64 {
+                *d
+            } else {
+                self.b.ins().sextend(types::I64, *d)
+            };
+            self.b.ins().store(mem(), d, a, 8 * (i as i32 + 1));
+        }
+        self.bind(sym, off, true);
+    }
+}

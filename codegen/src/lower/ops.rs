@@ -1,0 +1,301 @@
+//! Operators with occam semantics: `+ - * / \` checked (overflow, division by zero), `PLUS MINUS
+//! TIMES` modulo, shifts checked, short-circuit `AND`/`OR`, `AFTER`, and range-checked
+//! conversions with ROUND/TRUNC.
+
+use cranelift_codegen::ir::{
+    InstBuilder, Value,
+    condcodes::{FloatCC, IntCC},
+    types,
+};
+use occ_compiler::types::Prim;
+use occ_grammar::ast::{BinOp, ConvMode, Expr, Span};
+use occ_runtime::ErrorKind;
+
+use super::{Res, Tr};
+use crate::layout::cl_type;
+
+impl Tr<'_, '_> {
+    /// Lowers a binary operator expression `e`.
+    pub fn binary(&mut self, op: BinOp, lhs: &Expr, rhs: &Expr, e: &Expr) -> Res<Value> {
+        if matches!(op, BinOp::And | BinOp::Or) {
+            return self.short_circuit(op == BinOp::And, lhs, rhs);
+        }
+        let p = self.prim_of(lhs)?;
+        let a = self.expr(lhs)?;
+        let b = self.expr(rhs)?;
+        match op {
+            BinOp::Eq | BinOp::Ne | BinOp::Lt | BinOp::Gt | BinOp::Le | BinOp::Ge => {
+                Ok(self.compare(op, p, a, b))
+            }
+            BinOp::After => {
+                let d = self.b.ins().isub(a, b);
+                Ok(self.b.ins().icmp_imm_s(IntCC::SignedGreaterThan, d, 0))
+            }
+            BinOp::Shl | BinOp::Shr => self.shift(op, p, a, b, e.span),
+            _ => self.arith(op, p, a, b, e.span),
+        }
+    }
+
+    fn short_circuit(&mut self, and: bool, lhs: &Expr, rhs: &Expr) -> Res<Value> {
+        let a = self.expr(lhs)?;
+        let done = self.b.create_block();
+        self.b.append_block_param(done, types::I8);
+        let more = self.b.create_block();
+        if and {
+            self.b.ins().brif(a, more, &[], done, &[a.into()]);
+        } else {
+            self.b.ins().brif(a, done, &[a.into()], more, &[]);
+        }
+        self.b.switch_to_block(more);
+        let b = self.expr(rhs)?;
+        self.b.ins().jump(done, &[b.into()]);
+        self.b.switch_to_block(done);
+        Ok(self.b.block_params(done)[0])
+    }
+
+    fn compare(&mut self, op: BinOp, p: Prim, a: Value, b: Value) -> Value {
+        if p.is_real() {
+            let cc = match op {
+                BinOp::Eq => FloatCC::Equal,
+                BinOp::Ne => FloatCC::NotEqual,
+                BinOp::Lt => FloatCC::LessThan,
+                BinOp::Gt => FloatCC::GreaterThan,
+                BinOp::Le => FloatCC::LessThanOrEqual,
+                _ => FloatCC::GreaterThanOrEqual,
+            };
+            return self.b.ins().fcmp(cc, a, b);
+        }
+        let unsigned = matches!(p, Prim::Byte | Prim::Bool);
+        let cc = match (op, unsigned) {
+            (BinOp::Eq, _) => IntCC::Equal,
+            (BinOp::Ne, _) => IntCC::NotEqual,
+            (BinOp::Lt, false) => IntCC::SignedLessThan,
+            (BinOp::Gt, false) => IntCC::SignedGreaterThan,
+            (BinOp::Le, false) => IntCC::SignedLessThanOrEqual,
+            (BinOp::Ge, false) => IntCC::SignedGreaterThanOrEqual,
+            (BinOp::Lt, true) => IntCC::UnsignedLessThan,
+            (BinOp::Gt, true) => IntCC::UnsignedGreaterThan,
+            (BinOp::Le, true) => IntCC::UnsignedLessThanOrEqual,
+            _ => IntCC::UnsignedGreaterThanOrEqual,
+        };
+        self.b.ins().icmp(cc, a, b)
+    }
+
+    fn shift(&mut self, op: BinOp, p: Prim, a: Value, n: Value, span: Span) -> Res<Value> {
+        let t = cl_type(p);
+        let bits = i64::from(t.bits());
+        let n64 = if self.b.func.dfg.value_type(n) == types::I64 {
+            n
+        } else {
+            self.b.ins().sextend(types::I64, n)
+        };
+        let ok = self
+            .b
+            .ins()
+            .icmp_imm_s(IntCC::UnsignedLessThanOrEqual, n64, bits);
+        self.check(ok, ErrorKind::Shift, span);
+        let full = self.b.ins().icmp_imm_s(IntCC::Equal, n64, bits);
+        let r = if op == BinOp::Shl {
+            self.b.ins().ishl(a, n64)
+        } else {
+            self.b.ins().ushr(a, n64)
+        };
+        let zero = self.b.ins().iconst(t, 0);
+        Ok(self.b.ins().select(full, zero, r))
+    }
+
+    /// An arithmetic or bitwise operator in type `p`.
+    pub fn arith(&mut self, op: BinOp, p: Prim, a: Value, b: Value, span: Span) -> Res<Value> {
+        let ins = self.b.ins();
+        if p.is_real() {
+            return Ok(match op {
+                BinOp::Add | BinOp::Plus => ins.fadd(a, b),
+                BinOp::Sub | BinOp::Minus => ins.fsub(a, b),
+                BinOp::Mul | BinOp::Times => ins.fmul(a, b),
+                BinOp::Div => ins.fdiv(a, b),
+                BinOp::Rem => {
+                    let q = ins.fdiv(a, b);
+                    let q = self.b.ins().trunc(q);
+                    let m = self.b.ins().fmul(q, b);
+                    self.b.ins().fsub(a, m)
+                }
+                _ => return Err(self.cx.internal(span, "bad REAL operator")),
+            });
+        }
+        Ok(match op {
+            BinOp::Plus => ins.iadd(a, b),
+            BinOp::Minus => ins.isub(a, b),
+            BinOp::Times => ins.imul(a, b),
+            BinOp::BitAnd => ins.band(a, b),
+            BinOp::BitOr => ins.bor(a, b),
+            BinOp::Xor => ins.bxor(a, b),
+            BinOp::Add | BinOp::Sub | BinOp::Mul => self.checked(op, p, a, b, span),
+            BinOp::Div | BinOp::Rem => self.divide(op, p, a, b, span),
+            _ => return Err(self.cx.internal(span, "bad integer operator")),
+        })
+    }
+
+    fn checked(&mut self, op: BinOp, p: Prim, a: Value, b: Value, span: Span) -> Value {
+        let t = cl_type(p);
+        if t.bits() >= 32 {
+            let (r, of) = match op {
+                BinOp::Add => self.b.ins().sadd_overflow(a, b),
+                BinOp::Sub => self.b.ins().ssub_overflow(a, b),
+                _ => self.b.ins().smul_overflow(a, b),
+            };
+            let ok = self.b.ins().bxor_imm_s(of, 1);
+            self.check(ok, ErrorKind::Overflow, span);
+            return r;
+        }
+        let unsigned = p == Prim::Byte;
+        let (wa, wb) = if unsigned {
+            (
+                self.b.ins().uextend(types::I32, a),
+                self.b.ins().uextend(types::I32, b),
+            )
+        } else {
+            (
+                self.b.ins().sextend(types::I32, a),
+                self.b.ins().sextend(types::I32, b),
+            )
+        };
+        let r = match op {
+            BinOp::Add => self.b.ins().iadd(wa, wb),
+            BinOp::Sub => self.b.ins().isub(wa, wb),
+            _ => self.b.ins().imul(wa, wb),
+        };
+        let (lo, hi) = p.int_range().unwrap_or((0, 255));
+        self.range_check_i32(r, lo, hi, ErrorKind::Overflow, span);
+        self.b.ins().ireduce(t, r)
+    }
+
+    fn range_check_i32(&mut self, r: Value, lo: i64, hi: i64, kind: ErrorKind, span: Span) {
+        let a = self
+            .b
+            .ins()
+            .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, r, lo);
+        let b = self.b.ins().icmp_imm_s(IntCC::SignedLessThanOrEqual, r, hi);
+        let ok = self.b.ins().band(a, b);
+        self.check(ok, kind, span);
+    }
+
+    fn divide(&mut self, op: BinOp, p: Prim, a: Value, b: Value, span: Span) -> Value {
+        let t = cl_type(p);
+        let nz = self.b.ins().icmp_imm_s(IntCC::NotEqual, b, 0);
+        self.check(nz, ErrorKind::DivideByZero, span);
+        if p == Prim::Byte {
+            return if op == BinOp::Div {
+                self.b.ins().udiv(a, b)
+            } else {
+                self.b.ins().urem(a, b)
+            };
+        }
+        let min = if t.bits() == 64 {
+            i64::MIN
+        } else {
+            -(1i64 << (t.bits() - 1))
+        };
+        let is_m1 = self.b.ins().icmp_imm_s(IntCC::Equal, b, -1);
+        if op == BinOp::Div {
+            let is_min = self.b.ins().icmp_imm_s(IntCC::Equal, a, min);
+            let bad = self.b.ins().band(is_min, is_m1);
+            let ok = self.b.ins().bxor_imm_s(bad, 1);
+            self.check(ok, ErrorKind::Overflow, span);
+            self.b.ins().sdiv(a, b)
+        } else {
+            // x \ -1 is 0; avoid the MIN \ -1 trap of the hardware instruction.
+            let one = self.b.ins().iconst(t, 1);
+            let d = self.b.ins().select(is_m1, one, b);
+            self.b.ins().srem(a, d)
+        }
+    }
+
+    /// Converts `v` from `from` to `to` (range-checked; ROUND/TRUNC for reals).
+    pub fn convert(
+        &mut self,
+        v: Value,
+        from: Prim,
+        to: Prim,
+        mode: ConvMode,
+        span: Span,
+    ) -> Res<Value> {
+        let (ft, tt) = (cl_type(from), cl_type(to));
+        if from == to || (ft == tt && !matches!((from, to), (Prim::Bool, _) | (_, Prim::Bool)) && from != Prim::Byte && to != Prim::Byte) {
+            return Ok(v);
+        }
+        match (from.is_real(), to.is_real()) {
+            (false, false) => Ok(self.int_convert(v, from, to, span)),
+            (false, true) => Ok(if from == Prim::Byte || from == Prim::Bool {
+                self.b.ins().fcvt_from_uint(tt, v)
+            } else {
+                self.b.ins().fcvt_from_sint(tt, v)
+            }),
+            (true, true) => Ok(if tt.bits() > ft.bits() {
+                self.b.ins().fpromote(tt, v)
+            } else {
+                self.b.ins().fdemote(tt, v)
+            }),
+            (true, false) => Ok(self.real_to_int(v, from, to, mode, span)),
+        }
+    }
+
+    fn int_convert(&mut self, v: Value, from: Prim, to: Prim, span: Span) -> Value {
+        let (ft, tt) = (cl_type(from), cl_type(to));
+        let unsigned = matches!(from, Prim::Byte | Prim::Bool);
+        let w = if ft == types::I64 {
+            v
+        } else if unsigned {
+            self.b.ins().uextend(types::I64, v)
+        } else {
+            self.b.ins().sextend(types::I64, v)
+        };
+        let (lo, hi) = match to {
+            Prim::Bool => (0, 1),
+            p => p.int_range().unwrap_or((i64::MIN, i64::MAX)),
+        };
+        if lo != i64::MIN || hi != i64::MAX {
+            let a = self
+                .b
+                .ins()
+                .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, w, lo);
+            let b = self.b.ins().icmp_imm_s(IntCC::SignedLessThanOrEqual, w, hi);
+            let ok = self.b.ins().band(a, b);
+            self.check(ok, ErrorKind::Conversion, span);
+        }
+        if tt == types::I64 {
+            w
+        } else {
+            self.b.ins().ireduce(tt, w)
+        }
+    }
+
+    fn real_to_int(&mut self, v: Value, from: Prim, to: Prim, mode: ConvMode, span: Span) -> Value {
+        let r = if mode == ConvMode::Trunc {
+            self.b.ins().trunc(v)
+        } else {
+            self.b.ins().nearest(v)
+        };
+        let r64 = if from == Prim::Real32 {
+            self.b.ins().fpromote(types::F64, r)
+        } else {
+            r
+        };
+        let (lo, hi) = to.int_range().unwrap_or((0, 1));
+        let flo = self.b.ins().f64const(lo as f64);
+        let fhi = self.b.ins().f64const(hi as f64 + 1.0);
+        let a = self
+            .b
+            .ins()
+            .fcmp(FloatCC::GreaterThanOrEqual, r64, flo);
+        let b = self.b.ins().fcmp(FloatCC::LessThan, r64, fhi);
+        let ok = self.b.ins().band(a, b);
+        self.check(ok, ErrorKind::Conversion, span);
+        let tt = cl_type(to);
+        if tt.bits() >= 32 {
+            self.b.ins().fcvt_to_sint(tt, r64)
+        } else {
+            let i = self.b.ins().fcvt_to_sint(types::I32, r64);
+            self.b.ins().ireduce(tt, i)
+        }
+    }
+}

@@ -1,0 +1,92 @@
+//! Helpers for the end-to-end tests: compile an occam program in-process (with the course library
+//! available) and run it with captured output.
+
+#![allow(dead_code)]
+
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+
+use occ_runtime::{HostIo, NodeConfig, RunError, Stats};
+
+/// A shared byte buffer usable as host output.
+#[derive(Clone, Default)]
+pub struct Buf(pub Arc<Mutex<Vec<u8>>>);
+
+impl std::io::Write for Buf {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        self.0.lock().expect("buffer").extend_from_slice(b);
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+struct Loader;
+
+impl occ_grammar::preprocess::Loader for Loader {
+    fn load(&mut self, name: &str, _from: &str) -> Option<(String, String)> {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../stdlib").join(name);
+        std::fs::read_to_string(&p)
+            .ok()
+            .map(|t| (p.to_string_lossy().into_owned(), t))
+    }
+}
+
+/// Compiles `src`; panics with the diagnostics if it does not compile.
+pub fn compile(src: &str) -> occ_codegen::Compiled {
+    let parsed = occ_grammar::parse_source("test.occ", src, &mut Loader);
+    assert!(!parsed.has_errors(), "parse errors: {:?}", parsed.diagnostics);
+    let (checked, diags) = occ_compiler::check(&parsed.program);
+    let checked = checked.unwrap_or_else(|| {
+        panic!(
+            "check errors: {:?}",
+            diags.iter().map(|d| d.message()).collect::<Vec<_>>()
+        )
+    });
+    occ_codegen::compile(&parsed.program, &checked, &parsed.map)
+        .unwrap_or_else(|e| panic!("codegen: {e}"))
+}
+
+/// The outcome of running a program.
+pub struct Outcome {
+    pub result: Result<(), RunError>,
+    pub stdout: String,
+    pub stats: Stats,
+}
+
+/// Compiles and runs `src` with `input` on the keyboard channel.
+pub fn run_with(src: &str, input: &str) -> Outcome {
+    let c = compile(src);
+    let out = Buf::default();
+    let host = HostIo::new(
+        Box::new(std::io::Cursor::new(input.as_bytes().to_vec())),
+        Box::new(out.clone()),
+        Box::new(std::io::sink()),
+    );
+    let (result, stats) = c.run(NodeConfig::default(), host);
+    let stdout = String::from_utf8_lossy(&out.0.lock().expect("buffer")).into_owned();
+    Outcome {
+        result,
+        stdout,
+        stats,
+    }
+}
+
+/// Compiles and runs `src`, expecting normal termination; returns stdout.
+pub fn run(src: &str) -> String {
+    let o = run_with(src, "");
+    if let Err(e) = &o.result {
+        panic!("run failed: {e}\nstdout so far: {}", o.stdout);
+    }
+    o.stdout
+}
+
+/// Compiles and runs `src`, expecting a runtime error; returns its message.
+pub fn run_error(src: &str) -> String {
+    let o = run_with(src, "");
+    match o.result {
+        Ok(()) => panic!("expected an error, got success: {}", o.stdout),
+        Err(e) => e.to_string(),
+    }
+}
