@@ -15,10 +15,11 @@
 //!
 //! # Blocking points (the one rule)
 //!
-//! Before calling any entry that returns a [`Status`], compiled code stores into `ws[slot::IPTR]`
-//! the resume index of the code that follows the call ("after-op" index). If the entry returns a
-//! non-zero status, the function returns that status at once, without touching the workspace
-//! again. All values live across a blocking point must be in the workspace. When the process is
+//! Before calling any entry marked [`AbiEntry::blocking`], compiled code stores into
+//! `ws[slot::IPTR]` the resume index of the code that follows the call ("after-op" index). If the
+//! entry returns a non-zero status, the function returns that status at once, without touching the
+//! workspace again. (The non-blocking ALT entries also return a `Status`, always `DONE`; their
+//! result may be ignored.) All values live across a blocking point must be in the workspace. When the process is
 //! resumed, the runtime calls the frame's `ws[slot::CODE]` with the same `ws`, and the function
 //! dispatches to the after-op index. Data has already been moved: the second party to a
 //! communication copies, so after `rt_in` resumes, the input variable holds the value.
