@@ -3,7 +3,7 @@
 //!
 //! The `STATE` slot goes Enabling → (Waiting →) Ready. Enabling a channel guard whose channel is
 //! empty parks `Wptr|ALT|pri` in the channel word; an outputter finding that tag overwrites it with
-//! itself and makes the ALTer Ready ([`Node::alt_guard_ready`]). A timer guard records the earliest
+//! itself and makes the ALTer Ready (`Node::alt_guard_ready`). A timer guard records the earliest
 //! time in `TIME` (`TLINK` = TimeSet); `taltwt` puts the ALTer on the timer queue, and a firing
 //! timer makes it Ready. Disabling runs in the order codegen emits (PRI ALT: textual order): the
 //! first ready guard disabled is selected, and every enabled channel word still holding the ALT tag

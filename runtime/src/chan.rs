@@ -1,8 +1,8 @@
 //! One-word channels: `rt_in` and `rt_out` (T800 `in`/`out`, KRoC CCSP's channel word).
 //!
 //! Three layers, which do not interfere: **scheduling** (blocking the caller, requeueing the
-//! partner: [`Node::schedule`]), **channel-word manipulation** (this module) and **data movement**
-//! ([`copy`]). Why one word: a channel is always between exactly one reader and one writer, so the
+//! partner: `Node::schedule`), **channel-word manipulation** (this module) and **data movement**
+//! (`copy`). Why one word: a channel is always between exactly one reader and one writer, so the
 //! first party to arrive parks itself in the word and the second completes the transfer; no
 //! buffer, no lock, and a channel costs 8 bytes.
 //!

@@ -1,6 +1,6 @@
 //! Links between nodes, cross-node wake-ups and network-wide deadlock detection.
 //!
-//! A link direction is a shared [`LinkShared`] behind an external channel word on each node: the
+//! A link direction is a shared `LinkShared` behind an external channel word on each node: the
 //! output end on one node, the input end on the other, possibly on another OS thread. It follows
 //! the soft-channel rule: the first party registers itself (descriptor, data pointer, length, its
 //! node's mailbox) and blocks; the second copies the message, completes, and posts the first's
