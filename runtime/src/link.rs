@@ -10,7 +10,8 @@
 //!
 //! Copying into another node's workspace is sound because the blocked frame's node does not touch
 //! it until it has taken the descriptor from its mailbox, and the link's mutex (held while copying
-//! and posting) orders the two.
+//! and posting) orders the two. A node that stops withdraws its registrations under the same
+//! mutex and discards its mail, so no peer writes into a workspace that is about to be freed.
 //!
 //! A [`Network`] counts its nodes, those idle with nothing but link waits, and mail in flight: when
 //! every node is idle (or finished) and no mail is in flight, no link can move and each waiting
@@ -134,6 +135,25 @@ impl LinkEnd {
         self.shared.state.lock().unwrap_or_else(|p| p.into_inner())
     }
 
+    /// Removes every party registered by the node owning `mailbox`.
+    fn withdraw(&self, mailbox: &Arc<Mailbox>) {
+        let mut st = self.lock();
+        let mine = |p: &Party| Arc::ptr_eq(&p.mailbox, mailbox);
+        if st.reader.as_ref().is_some_and(mine) {
+            st.reader = None;
+        }
+        if st.writer.as_ref().is_some_and(mine) {
+            st.writer = None;
+        }
+        if st
+            .alt
+            .as_ref()
+            .is_some_and(|(_, m)| Arc::ptr_eq(m, mailbox))
+        {
+            st.alt = None;
+        }
+    }
+
     fn post(&self, to: &Mailbox, desc: Word) {
         self.shared.net.add(MAIL);
         to.post(desc);
@@ -208,8 +228,9 @@ impl Node {
     ) -> Status {
         let mut st = end.lock();
         if let Some(r) = st.reader.take() {
-            drop(st);
-            // SAFETY: the reader is blocked; its buffer is valid for `r.len` bytes.
+            // SAFETY: the reader is blocked; its buffer is valid for `r.len` bytes while it is
+            // registered, and the lock (held until the copy and the post are done) keeps its
+            // node from withdrawing and freeing it meanwhile.
             return unsafe { self.link_complete(end, ws, r, data, len, true) };
         }
         st.writer = Some(self.party(ws, data, len));
@@ -237,8 +258,7 @@ impl Node {
     ) -> Status {
         let mut st = end.lock();
         if let Some(w) = st.writer.take() {
-            drop(st);
-            // SAFETY: the writer is blocked; its buffer is valid for `w.len` bytes.
+            // SAFETY: as in `link_out`, with the roles swapped.
             return unsafe { self.link_complete(end, ws, w, data, len, false) };
         }
         st.reader = Some(self.party(ws, data, len));
@@ -353,7 +373,8 @@ impl Node {
         net.add(IDLE);
         while !self.mailbox.wait(IDLE_POLL) {
             if net.deadlocked() {
-                self.net_finished = true;
+                // `run` calls `leave_network`, which counts this node idle for good.
+                net.sub(IDLE);
                 return Err(RunError::Deadlock(self.deadlock_report()));
             }
         }
@@ -361,13 +382,24 @@ impl Node {
         Ok(())
     }
 
-    /// Counts this node as idle for good in its network (it has stopped).
+    /// Counts this node as idle for good in its network (it has stopped): withdraws every
+    /// registration its frames still have at links (their workspaces are about to go) and
+    /// discards mail posted to it.
     pub(crate) fn leave_network(&mut self) {
-        if let Some(net) = &self.net
-            && !self.net_finished
-        {
-            self.net_finished = true;
-            net.add(IDLE);
+        let Some(net) = self.net.clone() else {
+            return;
+        };
+        if self.net_finished {
+            return;
         }
+        self.net_finished = true;
+        for ext in &self.externals {
+            if let Engine::LinkIn(end) | Engine::LinkOut(end) = &ext.engine {
+                end.withdraw(&self.mailbox);
+            }
+        }
+        let discarded = std::mem::take(&mut *self.mailbox.lock()).len();
+        net.sub(MAIL * discarded as u64);
+        net.add(IDLE);
     }
 }

@@ -232,6 +232,14 @@ impl Node {
     }
 }
 
+impl Drop for Node {
+    /// A node dropped without running still counts as stopped in its network, so that its
+    /// peers can detect a deadlock instead of waiting for it.
+    fn drop(&mut self) {
+        self.leave_network();
+    }
+}
+
 impl Queue {
     const fn empty() -> Queue {
         Queue {

@@ -254,3 +254,48 @@ fn a_ring_of_eight_nodes_passes_a_token() {
     // Each of the 8 nodes adds 1 per round.
     unsafe { assert_eq!(*l(first_ws as Wptr, 4), NODES as Word * ROUNDS) };
 }
+
+#[test]
+fn a_dropped_node_does_not_keep_its_peer_waiting() {
+    let net = Network::new();
+    let (mut a, _) = node();
+    let (mut b, _) = node();
+    net.join(&mut a);
+    net.join(&mut b);
+    let (_a_out, b_in) = net.connect(&mut a, &mut b, "a->b");
+    spawn(&mut b, doubler, 5, &[0, b_in as Word, 1]);
+    let hb = run_on_thread(b);
+    drop(a);
+    assert!(matches!(hb.join().unwrap().1, Err(RunError::Deadlock(_))));
+}
+
+/// Halts the node at once (an unregistered location).
+unsafe extern "C" fn halts(ws: Wptr, node: *mut Node) -> Status {
+    unsafe { occ_runtime::error::rt_error(node, ws, occ_runtime::ErrorKind::Stop as Word, -1) }
+}
+
+#[test]
+fn a_halted_node_withdraws_from_its_links() {
+    let net = Network::new();
+    let (mut a, _) = node();
+    let (mut b, _) = node();
+    net.join(&mut a);
+    net.join(&mut b);
+    let (b_out, a_in) = net.connect(&mut b, &mut a, "b->a");
+    // a: a reader waits on the link, then another process halts the node.
+    spawn(&mut a, doubler, 5, &[0, a_in as Word, 1]);
+    spawn(&mut a, halts, 1, &[]);
+    // b: outputs on the link 20 ms later, when a has long stopped.
+    spawn(
+        &mut b,
+        crate::timers::late_sender,
+        3,
+        &[b_out as Word, 1, 20_000],
+    );
+    let (ha, hb) = (run_on_thread(a), run_on_thread(b));
+    let (a, ra) = ha.join().unwrap();
+    assert!(matches!(ra, Err(RunError::Halted(_))));
+    drop(a);
+    // The reader's registration went with its node: b's output finds no reader and deadlocks.
+    assert!(matches!(hb.join().unwrap().1, Err(RunError::Deadlock(_))));
+}
