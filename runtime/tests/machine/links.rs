@@ -299,3 +299,126 @@ fn a_halted_node_withdraws_from_its_links() {
     // The reader's registration went with its node: b's output finds no reader and deadlocks.
     assert!(matches!(hb.join().unwrap().1, Err(RunError::Deadlock(_))));
 }
+
+// Stress: node a runs 3 senders, each sending `PER` values over its own link, rescheduling at
+// random; node b ALTs over the 3 link inputs with a 200 µs timer guard, until it has every value
+// (or 20,000 timeouts, so that a lost message fails the test instead of hanging it).
+
+const LINKS: usize = 3;
+const PER: Word = 300;
+
+/// Sends PER values (k*1000 + i) on local 0, rescheduling when a random bit says so.
+/// Locals: 0 chan, 1 k, 2 i, 3 value, 4 random state.
+unsafe extern "C" fn jittery_sender(ws: Wptr, node: *mut Node) -> Status {
+    unsafe {
+        loop {
+            match iptr(ws) {
+                0 => {
+                    *l(ws, 2) = 0;
+                    *l(ws, 4) = 0x2545_F491 + *l(ws, 1);
+                    set_iptr(ws, 1);
+                }
+                1 => {
+                    if *l(ws, 2) == PER {
+                        return Status::DONE;
+                    }
+                    *l(ws, 3) = *l(ws, 1) * 1000 + *l(ws, 2);
+                    *l(ws, 2) += 1;
+                    set_iptr(ws, 2);
+                    check!(rt_out(node, ws, *l(ws, 0) as *mut Word, l(ws, 3).cast(), 8));
+                }
+                _ => {
+                    let mut x = *l(ws, 4) as u64;
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    *l(ws, 4) = x as Word;
+                    set_iptr(ws, 1);
+                    if x % 4 == 0 {
+                        check!(occ_runtime::sched::rt_reschedule(node, ws));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Locals: 0 address of LINKS channel words, 1 received, 2 sum, 3 timeouts, 4 buffer,
+/// 5 deadline, 6 selected.
+unsafe extern "C" fn link_alter(ws: Wptr, node: *mut Node) -> Status {
+    use occ_runtime::alt::*;
+    use occ_runtime::timer::rt_timer_read;
+    unsafe {
+        let ch = |i: usize| *(*l(ws, 0) as *const Word).add(i) as *mut Word;
+        loop {
+            match iptr(ws) {
+                0 => {
+                    if *l(ws, 1) == LINKS as Word * PER || *l(ws, 3) == 20_000 {
+                        return Status::DONE;
+                    }
+                    *l(ws, 5) = rt_timer_read(node) + 200;
+                    rt_talt(node, ws);
+                    for i in 0..LINKS {
+                        rt_enbc(node, ws, 1, ch(i));
+                    }
+                    rt_enbt(node, ws, 1, *l(ws, 5));
+                    set_iptr(ws, 1);
+                    check!(rt_taltwt(node, ws));
+                }
+                1 => {
+                    let start = (*l(ws, 1) as usize) % LINKS; // rotate for fairness
+                    for k in 0..LINKS {
+                        let i = (start + k) % LINKS;
+                        rt_disc(node, ws, 1, ch(i), i as Word);
+                    }
+                    rt_dist(node, ws, 1, *l(ws, 5), LINKS as Word);
+                    *l(ws, 6) = rt_altend(node, ws);
+                    if *l(ws, 6) == LINKS as Word {
+                        *l(ws, 3) += 1;
+                        set_iptr(ws, 0);
+                        continue;
+                    }
+                    set_iptr(ws, 2);
+                    check!(rt_in(node, ws, ch(*l(ws, 6) as usize), l(ws, 4).cast(), 8));
+                }
+                _ => {
+                    *l(ws, 1) += 1;
+                    *l(ws, 2) += *l(ws, 4);
+                    set_iptr(ws, 0);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn alt_over_links_with_jittery_senders_receives_everything() {
+    let net = Network::new();
+    let (mut a, _) = node();
+    let (mut b, _) = node();
+    net.join(&mut a);
+    net.join(&mut b);
+    let mut ins: Box<[Word; LINKS]> = Box::new([0; LINKS]);
+    for k in 0..LINKS {
+        let (out, inp) = net.connect(&mut a, &mut b, &format!("l{k}"));
+        ins[k] = inp as Word;
+        spawn(&mut a, jittery_sender, 5, &[out as Word, k as Word]);
+    }
+    let wb = spawn(&mut b, link_alter, 7, &[ins.as_ptr() as Word]) as usize;
+    let results = Network::run_all(vec![a, b]);
+    for (_, r) in &results {
+        assert!(r.is_ok(), "{r:?}");
+    }
+    let expected: Word = (0..LINKS as Word)
+        .map(|k| (0..PER).map(|i| k * 1000 + i).sum::<Word>())
+        .sum();
+    unsafe {
+        assert_eq!(
+            *l(wb as Wptr, 1),
+            LINKS as Word * PER,
+            "every message arrived"
+        );
+        assert_eq!(*l(wb as Wptr, 2), expected);
+    }
+    drop(results);
+}
