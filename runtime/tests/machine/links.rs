@@ -334,7 +334,7 @@ unsafe extern "C" fn jittery_sender(ws: Wptr, node: *mut Node) -> Status {
                     x ^= x << 17;
                     *l(ws, 4) = x as Word;
                     set_iptr(ws, 1);
-                    if x % 4 == 0 {
+                    if x.is_multiple_of(4) {
                         check!(occ_runtime::sched::rt_reschedule(node, ws));
                     }
                 }
