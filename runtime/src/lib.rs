@@ -5,7 +5,17 @@
 //! [`abi::ABI_TABLE`]; [`abi`] states the whole contract. A [`Node`] runs them: its scheduler
 //! ([`sched`]), channels ([`chan`]), ALT ([`alt`]), timers ([`timer`]), PAR ([`par`]), errors
 //! ([`error`]) and deadlock reports ([`deadlock`]). Nodes own all their state, so many run in one
-//! OS process; [`Network`] joins them with links.
+//! OS process; [`Network`] joins them with links and [`Network::run_all`] runs them, one thread
+//! per node.
+//!
+//! # What codegen registers
+//!
+//! [`ProgramInfo`] (shared by every node running the program) makes reports readable at no run-time
+//! cost: `locations` (the `location` argument of `rt_error` indexes it), and per compiled function
+//! a [`ProcInfo`] with its PROC name, its address, the location of each resume index (deadlock
+//! reports show where a process is blocked) and the channels declared in its workspace (deadlock
+//! reports name the channel a process waits on, found in the frames of the blocked processes and
+//! their callers).
 //!
 //! # Running a compiled program
 //!
