@@ -114,7 +114,6 @@ impl Node {
                 return Some(wptr(d));
             }
         }
-        self.stats.context_switches += 1;
         if self
             .stats
             .context_switches
@@ -122,6 +121,16 @@ impl Node {
         {
             self.poll_events();
         }
+        let next = self.dequeue_next();
+        if next.is_some() {
+            self.stats.context_switches += 1;
+        }
+        next
+    }
+
+    /// Takes the next frame from the high queue, the interrupted slot or the low queue.
+    #[inline(always)]
+    fn dequeue_next(&mut self) -> Option<Wptr> {
         if let Some(ws) = self.dequeue(priority::HIGH) {
             self.cur_pri = priority::HIGH;
             return Some(ws);
