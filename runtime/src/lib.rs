@@ -88,6 +88,7 @@ mod frame;
 pub mod host;
 pub mod intrinsic;
 pub mod link;
+mod mailbox;
 pub mod node;
 pub mod par;
 pub mod program;

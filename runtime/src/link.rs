@@ -4,7 +4,7 @@
 //! output end on one node, the input end on the other, possibly on another OS thread. It follows
 //! the soft-channel rule: the first party registers itself (descriptor, data pointer, length, its
 //! node's mailbox) and blocks; the second copies the message, completes, and posts the first's
-//! descriptor to the first's node [`Mailbox`]; that node requeues it when it drains its mail. An
+//! descriptor to the first's node mailbox; that node requeues it when it drains its mail. An
 //! ALT on a link input registers in the link and is posted an ALT-tagged descriptor when a writer
 //! arrives.
 //!
@@ -18,48 +18,18 @@
 //! node reports a deadlock instead of waiting for ever.
 
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering::SeqCst};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
 use crate::abi::{Status, Word, Wptr, tag};
 use crate::chan::copy;
 use crate::error::{ErrorKind, RunError};
 use crate::external::Engine;
+use crate::mailbox::Mailbox;
 use crate::node::Node;
 
 /// How often an idle node re-checks the network for deadlock.
 const IDLE_POLL: Duration = Duration::from_millis(2);
-
-/// A node's inbox of descriptors to requeue, posted by other nodes.
-#[derive(Debug, Default)]
-pub struct Mailbox {
-    mail: Mutex<Vec<Word>>,
-    ready: Condvar,
-}
-
-impl Mailbox {
-    fn lock(&self) -> MutexGuard<'_, Vec<Word>> {
-        self.mail.lock().unwrap_or_else(|p| p.into_inner())
-    }
-
-    fn post(&self, desc: Word) {
-        self.lock().push(desc);
-        self.ready.notify_one();
-    }
-
-    /// Waits up to `d` for mail; returns whether there is some.
-    fn wait(&self, d: Duration) -> bool {
-        let mail = self.lock();
-        if !mail.is_empty() {
-            return true;
-        }
-        let (mail, _) = self
-            .ready
-            .wait_timeout(mail, d)
-            .unwrap_or_else(|p| p.into_inner());
-        !mail.is_empty()
-    }
-}
 
 /// Counters shared by the nodes of one network.
 ///
@@ -324,26 +294,43 @@ impl Node {
     /// `disc` on a link input: unregisters the ALTer (withdrawing a wake-up already posted) and
     /// reports whether a writer waits.
     pub(crate) fn link_disable(&mut self, end: &LinkEnd, ws: Wptr) -> bool {
-        let mut st = end.lock();
         let me = self.desc(ws) | tag::ALT;
-        if st.alt.take().is_some() {
+        let (withdrawn, ready) = {
+            let mut st = end.lock();
+            let withdrawn = st.alt.as_ref().is_some_and(|(d, _)| *d == me);
+            if withdrawn {
+                st.alt = None;
+            }
+            (withdrawn, st.writer.is_some())
+        };
+        if withdrawn {
             self.link_waiters -= 1;
         } else {
-            let mut mail = self.mailbox.lock();
-            if let Some(i) = mail.iter().position(|&d| d == me) {
-                mail.remove(i);
-                end.shared.net.sub(MAIL);
-                self.link_waiters -= 1;
-            }
+            // Either this ALT never registered (the writer was already there), or a writer took
+            // the registration and posted the wake-up under the link lock, so it is in the
+            // mailbox by now: deliver the mail, dropping this ALT's own wake-up.
+            let mail = self.mailbox.take_all();
+            self.deliver(mail, Some(me));
         }
-        st.writer.is_some()
+        ready
     }
 
     /// Requeues every descriptor posted by other nodes.
     pub(crate) fn drain_mailbox(&mut self) {
-        let mail = std::mem::take(&mut *self.mailbox.lock());
+        if self.mailbox.has_mail() {
+            let mail = self.mailbox.take_all();
+            self.deliver(mail, None);
+        }
+    }
+
+    /// Acts on taken mail: schedules plain descriptors, makes ALTers Ready; a descriptor equal to
+    /// `skip` (a withdrawn ALT wake-up) is dropped.
+    fn deliver(&mut self, mail: Vec<Word>, skip: Option<Word>) {
         for &desc in &mail {
             self.link_waiters -= 1;
+            if Some(desc) == skip {
+                continue;
+            }
             if desc & tag::ALT != 0 {
                 // SAFETY: an ALT-tagged mail names a live ALTing frame of this node that
                 // registered at a link and has not disabled it (disable withdraws the mail).
@@ -398,7 +385,7 @@ impl Node {
                 end.withdraw(&self.mailbox);
             }
         }
-        let discarded = std::mem::take(&mut *self.mailbox.lock()).len();
+        let discarded = self.mailbox.take_all().len();
         net.sub(MAIL * discarded as u64);
         net.add(IDLE);
     }

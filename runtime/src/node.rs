@@ -13,7 +13,8 @@ use crate::error::{Halt, RunError};
 use crate::external::External;
 use crate::frame::set;
 use crate::host::HostIo;
-use crate::link::{Mailbox, NetState};
+use crate::link::NetState;
+use crate::mailbox::Mailbox;
 use crate::program::ProgramInfo;
 use crate::stats::Stats;
 
@@ -85,7 +86,7 @@ pub struct Node {
 
 // SAFETY: a Node's raw pointers all point into its own arena or into workspaces it owns; they are
 // only dereferenced by the thread currently running the node. Cross-node traffic goes through
-// the mailbox (a Mutex) and link state (a Mutex).
+// the lock-free mailbox and the link state (a Mutex).
 unsafe impl Send for Node {}
 
 impl Node {
