@@ -23,6 +23,7 @@ fn main() {
     let mut files = Files { dirs: Vec::new() };
     let mut inputs = Vec::new();
     let print = std::env::var("PRINT").is_ok();
+    let all = std::env::var("ALL").is_ok();
     while let Some(arg) = args.next() {
         match arg.as_str() {
             "-I" => files.dirs.extend(args.next().map(PathBuf::from)),
@@ -39,7 +40,7 @@ fn main() {
         let errors = parsed.has_errors();
         failed += usize::from(errors);
         println!("{input}: {}", if errors { "ERRORS" } else { "ok" });
-        for d in parsed.diagnostics.iter().take(5) {
+        for d in parsed.diagnostics.iter().take(if all { 1000 } else { 5 }) {
             let loc = d.locate(&parsed.map);
             let (file, line) = loc
                 .map(|l| (parsed.map.files[l.file].path.clone(), l.line))

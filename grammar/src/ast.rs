@@ -263,6 +263,13 @@ pub enum ExprKind {
     },
     /// A table `[a, b, c]`.
     Table(Vec<Expr>),
+    /// A table decorated with a type, as a RECORD or array literal: `[3, 4](POINT)`.
+    TypedTable {
+        /// The elements (or fields, in order).
+        items: Vec<Expr>,
+        /// The decorating type.
+        ty: Ty,
+    },
     /// An array constructor `[i = base FOR count STEP s | value]`.
     Constructor {
         /// The replicator.

@@ -13,7 +13,7 @@
 
 use crate::ast::Span;
 use crate::diagnostic::Diagnostic;
-use crate::lexer::{Kw, Token, keyword};
+use crate::lexer::{Kw, LexError, Token, keyword};
 use logos::Logos;
 
 /// A token with its byte range, as the parser wants it.
@@ -83,7 +83,13 @@ impl<'a> Layout<'a> {
                     Ok(token) => self.token(token, start, end),
                     Err(error) => {
                         let span = Span::new(start, end);
-                        let diag = Diagnostic::error(span, error.message(), "here");
+                        let message = match error {
+                            LexError::BadCharacter => {
+                                format!("`{}` is not an occam token", &self.text[start..end])
+                            }
+                            other => other.message().to_string(),
+                        };
+                        let diag = Diagnostic::error(span, message, "here");
                         self.diagnostics.push(diag);
                     }
                 }

@@ -3,7 +3,7 @@
 
 use crate::ast::{Program, Span};
 use crate::diagnostic::Diagnostic;
-use crate::lexer::Token;
+use crate::lexer::{Kw, Token};
 use lalrpop_util::ParseError;
 
 #[allow(
@@ -21,6 +21,14 @@ mod generated {
 /// errors (with the erroneous lines skipped); `diagnostics` then holds at least one error.
 pub fn parse(text: &str) -> (Program, Vec<Diagnostic>) {
     let (tokens, mut diagnostics) = crate::layout::tokens(text);
+    if let Some(deep) = too_deep(&tokens) {
+        diagnostics.push(deep);
+        let empty = Program {
+            decls: Vec::new(),
+            pragmas: Vec::new(),
+        };
+        return (empty, diagnostics);
+    }
     let mut parse_diags = Vec::new();
     let result = generated::ProgramParser::new().parse(
         &mut parse_diags,
@@ -42,6 +50,39 @@ pub fn parse(text: &str) -> (Program, Vec<Diagnostic>) {
         crate::diagnostic::Place::File(_) => 0,
     });
     (program, diagnostics)
+}
+
+/// The deepest nesting (parentheses, brackets, indentation, runs of monadic operators) the parser
+/// accepts; deeper programs are rejected before parsing so that no later recursive pass can
+/// overflow the stack.
+pub const MAX_NESTING: usize = 200;
+
+/// Reports the first place nested deeper than [`MAX_NESTING`].
+fn too_deep(tokens: &[crate::layout::Spanned<'_>]) -> Option<Diagnostic> {
+    let (mut brackets, mut indents, mut monadic) = (0usize, 0usize, 0usize);
+    for (l, token, r) in tokens {
+        match token {
+            Token::LParen | Token::LBracket | Token::TableOpen => brackets += 1,
+            Token::RParen | Token::RBracket => brackets = brackets.saturating_sub(1),
+            Token::Indent => indents += 1,
+            Token::Dedent => indents = indents.saturating_sub(1),
+            _ => {}
+        }
+        let is_monadic = matches!(
+            token,
+            Token::Minus | Token::Tilde | Token::Keyword(Kw::Not | Kw::Minus | Kw::Bitnot)
+        );
+        monadic = if is_monadic { monadic + 1 } else { 0 };
+        if brackets.max(indents).max(monadic) > MAX_NESTING {
+            let diag = Diagnostic::error(
+                Span::new(*l, *r),
+                format!("the program is nested more than {MAX_NESTING} levels deep here"),
+                "too deep",
+            );
+            return Some(diag);
+        }
+    }
+    None
 }
 
 /// Maps every lalrpop `ParseError` variant to a diagnostic with a span, a label and the
@@ -120,6 +161,7 @@ fn occam_term(terminal: &str) -> String {
         "CHARLIT" => "a character".to_string(),
         "STRLIT" => "a string".to_string(),
         "ASMBODY" => "an ASM body".to_string(),
+        "TABLEOPEN" => "`[`".to_string(),
         quoted => format!("`{}`", quoted.trim_matches('"').replace("\\\\", "\\")),
     }
 }

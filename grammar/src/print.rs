@@ -16,8 +16,13 @@ pub fn program(p: &Program) -> String {
     printer.out
 }
 
-/// Prints one expression.
-pub fn expr(e: &Expr) -> String {
+/// Prints one expression (a VALOF expression spans several lines).
+pub fn expr_text(e: &Expr) -> String {
+    expr(e).replace(BREAK, "\n  ")
+}
+
+/// Prints one expression for use inside a line: the printer's `line` indents any breaks.
+fn expr(e: &Expr) -> String {
     let mut s = String::new();
     write_expr(&mut s, e);
     s
@@ -97,6 +102,9 @@ pub fn token_text(token: &Token) -> &'static str {
     }
 }
 
+/// A line break inside a printed expression, indented by whoever prints the enclosing line.
+const BREAK: &str = "\n\u{1}";
+
 #[derive(Default)]
 struct Printer {
     out: String,
@@ -105,10 +113,9 @@ struct Printer {
 
 impl Printer {
     fn line(&mut self, text: &str) {
-        for _ in 0..self.depth {
-            self.out.push_str("  ");
-        }
-        self.out.push_str(text);
+        let indent = "  ".repeat(self.depth);
+        self.out.push_str(&indent);
+        self.out.push_str(&text.replace(BREAK, &format!("\n{indent}  ")));
         self.out.push('\n');
     }
 
@@ -646,12 +653,27 @@ fn write_expr(s: &mut String, e: &Expr) {
         ExprKind::Table(items) => {
             let _ = write!(s, "[{}]", exprs_s(items));
         }
+        ExprKind::TypedTable { items, ty } => {
+            let _ = write!(s, "[{}](", exprs_s(items));
+            write_ty(s, ty);
+            s.push(')');
+        }
         ExprKind::Constructor { repl, value } => {
             let _ = write!(s, "[{} | {}]", repl_s(repl), expr(value));
         }
         ExprKind::Valof(v) => {
-            // VALOF expressions are not produced by the parser yet; print a readable form.
-            let _ = write!(s, "(VALOF ... RESULT {})", exprs_s(&v.results));
+            // `(` ends the line; the VALOF block follows on marked lines that the enclosing
+            // printer indents (see `Printer::line`), then `)` on a line of its own.
+            let mut inner = Printer::default();
+            inner.valof(v);
+            s.push('(');
+            for line in inner.out.lines() {
+                s.push_str(BREAK);
+                s.push_str("  ");
+                s.push_str(line);
+            }
+            s.push_str(BREAK);
+            s.push(')');
         }
         ExprKind::Directed { chan, dir } => {
             write_expr(s, chan);
