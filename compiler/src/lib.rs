@@ -14,6 +14,7 @@ pub mod predefined;
 pub mod types;
 pub mod usage;
 
+pub use check::Options;
 pub use checked::CheckedProgram;
 pub use diagnostic::{Diagnostic, DiagnosticKind, Severity};
 
@@ -24,7 +25,15 @@ pub use diagnostic::{Diagnostic, DiagnosticKind, Severity};
 /// never stops at the first error). Spans in the diagnostics are offsets into the preprocessed
 /// text the program was parsed from. Never panics, whatever the AST.
 pub fn check(program: &occ_grammar::ast::Program) -> (Option<CheckedProgram>, Vec<Diagnostic>) {
-    let (checked, diags) = check::run(program);
+    check_with(program, Options::default())
+}
+
+/// [`check`] with some checks switched off (see [`Options::from_source`] for `#OPTION`).
+pub fn check_with(
+    program: &occ_grammar::ast::Program,
+    options: Options,
+) -> (Option<CheckedProgram>, Vec<Diagnostic>) {
+    let (checked, diags) = check::run(program, options);
     let ok = diags.iter().all(|d| d.severity != Severity::Error);
     (ok.then_some(checked), diags)
 }

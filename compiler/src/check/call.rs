@@ -61,12 +61,16 @@ impl Checker {
             self.error(DiagnosticKind::ConstantError { what }, r.count.span);
         }
         let id = self.declare(&r.name, SymbolKind::Replicator, Type::INT, false);
-        Repl {
+        let repl = Repl {
             id,
             base,
             count,
             step,
+        };
+        if let Some(values) = repl.values(256) {
+            self.repl_values.insert(id, values);
         }
+        repl
     }
 
     /// Checks a VALOF and returns its result types, checking them against `wants` when given.
@@ -332,6 +336,9 @@ impl Checker {
 
     /// Two reference actuals naming overlapping storage are aliases.
     fn check_ref_aliases(&mut self, refs: &[Access]) {
+        if !self.options.alias {
+            return;
+        }
         for (i, a) in refs.iter().enumerate() {
             let name = self.sym(a.symbol).name.clone();
             if self.permit_aliases.contains(&name) {
@@ -340,7 +347,7 @@ impl Checker {
             if let Some(b) = refs
                 .iter()
                 .take(i)
-                .find(|b| b.symbol == a.symbol && may_overlap(a.part, b.part))
+                .find(|b| b.symbol == a.symbol && may_overlap(&self.tables, a.part, b.part))
             {
                 let d = Diagnostic::error(DiagnosticKind::Alias { name }, a.span)
                     .with_related(b.span, "also passed here");

@@ -156,7 +156,15 @@ impl Checker {
             DeclKind::Var { ty, names } => {
                 let ty = self.ty(ty);
                 let assignable = ty.is_data();
-                for name in names {
+                for (i, name) in names.iter().enumerate() {
+                    if names.iter().take(i).any(|n| n.text == name.text) {
+                        self.error(
+                            DiagnosticKind::Duplicate {
+                                name: name.text.clone(),
+                            },
+                            name.span,
+                        );
+                    }
                     self.declare(name, SymbolKind::Variable, ty.clone(), assignable);
                 }
             }
@@ -192,6 +200,9 @@ impl Checker {
                 self.expect_type(&Type::INT, &t.ty, at.span);
             }
             DeclKind::Asm(_) => {}
+            DeclKind::PlaceIn { name, .. } => {
+                self.lookup(name);
+            }
         }
     }
 
@@ -223,16 +234,29 @@ impl Checker {
             return;
         }
         let p = self.place(value, None);
+        let data = p.ty.is_data();
+        if data && !p.assignable && !p.ty.is_error() {
+            let name = super::process::element_name(value);
+            self.error(DiagnosticKind::NotAssignable { name }, value.span);
+        }
         let ty = self.declared_type(want, p.ty, value.span);
         let ty = with_direction(ty, direction(dir));
-        let id = self.declare(name, SymbolKind::Abbrev { mode }, ty, p.assignable);
+        let id = self.declare(name, SymbolKind::Abbrev { mode }, ty, data);
         if let Some(target) = p.target {
             self.out.symbols[id].alias_of = Some(target);
-            self.abbreviated.push(super::Abbreviated {
-                target,
-                alias: id,
-                val: false,
+            // Abbreviating is a use of the target: it may not be abbreviated already.
+            let (resolved, hops) = self.resolve_alias(Access {
+                span: value.span,
+                ..target
             });
+            if self.check_alias(resolved, &hops) {
+                let entry = super::Abbreviated {
+                    target,
+                    alias: id,
+                    val: false,
+                };
+                self.abbreviated.push(entry);
+            }
         }
     }
 

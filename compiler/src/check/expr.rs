@@ -101,11 +101,35 @@ impl Checker {
     fn expr_kind(&mut self, e: &Expr, want: Option<&Type>) -> Typed {
         match &e.kind {
             ExprKind::Literal(l) => self.literal(l, want, e.span, false),
-            ExprKind::Name(_)
-            | ExprKind::Subscript { .. }
-            | ExprKind::Slice { .. }
-            | ExprKind::Directed { .. } => {
+            ExprKind::Directed { .. } => {
+                let p = self.place(e, None);
+                Typed {
+                    ty: p.ty,
+                    value: None,
+                    target: p.target,
+                }
+            }
+            ExprKind::TypedTable { items, ty } => {
+                let ty = self.ty(ty);
+                self.typed_table(items, ty, e.span)
+            }
+            ExprKind::Name(_) | ExprKind::Subscript { .. } | ExprKind::Slice { .. } => {
                 let p = self.place(e, Some(crate::usage::Mode::Read));
+                if !p.ty.is_data() {
+                    let found = match p.ty {
+                        Type::Timer => "a timer",
+                        Type::Port(_) => "a port",
+                        _ => "a channel",
+                    };
+                    let name = super::process::element_name(e);
+                    let kind = DiagnosticKind::WrongKind {
+                        name,
+                        expected: "a value",
+                        found,
+                    };
+                    self.error(kind, e.span);
+                    return Typed::of(Type::Error);
+                }
                 Typed {
                     ty: p.ty,
                     value: p.value,
@@ -203,15 +227,17 @@ impl Checker {
         let written = l.ty.as_ref().map(|t| self.ty(t));
         let ctx = written.clone().or_else(|| want.cloned());
         let ctx_prim = ctx.as_ref().and_then(|t| self.out.types.prim(t));
+        let written_prim = written.as_ref().and_then(|t| self.out.types.prim(t));
         let (ty, r) = match &l.kind {
             LitKind::Bool(b) => (Type::BOOL, Ok(Value::Bool(*b))),
             LitKind::String(bytes) => {
                 let n = u32::try_from(bytes.len()).unwrap_or(u32::MAX);
                 (Type::array(Some(n), Type::BYTE), Ok(Value::string(bytes)))
             }
-            LitKind::Byte(b) => match ctx_prim.filter(|p| p.is_integer()) {
+            // A character is a BYTE unless decorated: `'a'(INT)`.
+            LitKind::Byte(b) => match written_prim.filter(|p| p.is_integer()) {
                 Some(p) => (
-                    ctx.unwrap_or(Type::BYTE),
+                    written.clone().unwrap_or(Type::BYTE),
                     integer(u64::from(*b), false, negate, p),
                 ),
                 None => (Type::BYTE, Ok(Value::Int(i64::from(*b)))),
@@ -384,8 +410,10 @@ impl Checker {
             }
             return Typed::of(to);
         };
-        if from_p.is_real() && !to_p.is_real() && to_p != Prim::Bool && mode == ast::ConvMode::Plain
-        {
+        let inexact = (from_p.is_real() && !to_p.is_real())
+            || (!from_p.is_real() && to_p.is_real())
+            || (from_p == Prim::Real64 && to_p == Prim::Real32);
+        if inexact && mode == ast::ConvMode::Plain {
             self.error(
                 DiagnosticKind::NeedsRounding {
                     from: from_p.name(),
@@ -402,6 +430,13 @@ impl Checker {
 
     /// The type of a `SIZE` / `BYTESIN` operand: a type, or the type of an expression.
     fn type_or_expr(&mut self, toe: &TypeOrExpr) -> Type {
+        self.quiet += 1;
+        let ty = self.type_or_expr_inner(toe);
+        self.quiet -= 1;
+        ty
+    }
+
+    fn type_or_expr_inner(&mut self, toe: &TypeOrExpr) -> Type {
         match toe {
             TypeOrExpr::Type(t) => self.ty(t),
             TypeOrExpr::Expr(Expr {
@@ -418,6 +453,7 @@ impl Checker {
                     _ => Type::Error,
                 }
             }
+            TypeOrExpr::Expr(e) if super::place::is_element(e) => self.place(e, None).ty,
             TypeOrExpr::Expr(e) => self.expr(e, None).ty,
         }
     }
@@ -436,7 +472,10 @@ impl Checker {
     }
 
     fn table(&mut self, items: &[Expr], want: Option<&Type>, span: ast::Span) -> Typed {
-        let mut elem = want.and_then(Type::elem).cloned();
+        let want_under = want.map(|w| self.out.types.underlying(w).clone());
+        let mut elem = want_under.as_ref().and_then(Type::elem).cloned();
+        // An untyped table takes a named array type from context: `v := [1.0, 0.0, 0.0]`.
+        let untyped = !items.is_empty() && items.iter().all(is_untyped);
         let mut values = Some(Vec::with_capacity(items.len()));
         for item in items {
             let t = self.expr(item, elem.as_ref());
@@ -453,10 +492,44 @@ impl Checker {
         }
         let n = u32::try_from(items.len()).ok();
         let _ = span;
-        Typed::constant(
-            Type::array(n, elem.unwrap_or(Type::Error)),
-            values.map(Value::Array),
-        )
+        let ty = Type::array(n, elem.unwrap_or(Type::Error));
+        let fits = want_under
+            .as_ref()
+            .is_some_and(|u| self.out.types.compatible(u, &ty));
+        let ty = match want {
+            Some(w @ Type::Named(_)) if untyped && fits => w.clone(),
+            _ => ty,
+        };
+        Typed::constant(ty, values.map(Value::Array))
+    }
+
+    /// Checks `[a, b](T)`: a RECORD literal (items against fields) or an array literal of type `T`.
+    fn typed_table(&mut self, items: &[Expr], ty: Type, span: ast::Span) -> Typed {
+        let Some(fields) = self.out.types.record_fields(&ty).map(<[_]>::to_vec) else {
+            let t = self.table(items, Some(&ty), span);
+            let under = self.out.types.underlying(&ty).clone();
+            if !matches!(t.ty, Type::Named(_)) {
+                self.expect_type(&under, &t.ty, span);
+            }
+            return Typed::constant(ty, t.value);
+        };
+        if fields.len() != items.len() {
+            let kind = DiagnosticKind::ValueCount {
+                expected: fields.len(),
+                found: items.len(),
+            };
+            self.error(kind, span);
+        }
+        let mut values = Some(Vec::new());
+        for (item, (_, fty)) in items.iter().zip(&fields) {
+            let t = self.expr(item, Some(fty));
+            self.expect_type(fty, &t.ty, item.span);
+            match (&mut values, t.value) {
+                (Some(vs), Some(v)) => vs.push(v),
+                _ => values = None,
+            }
+        }
+        Typed::constant(ty, values.map(Value::Record))
     }
 }
 

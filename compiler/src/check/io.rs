@@ -25,20 +25,19 @@ impl Checker {
             Type::Timer if mode == Mode::Input => End::Timer,
             Type::Port(t) => End::Port(*t),
             Type::Error => End::Unknown,
-            other => {
-                let found = self.out.types.display(&other);
+            _ => {
                 let expected = if mode == Mode::Input {
                     "a channel or timer"
                 } else {
                     "a channel"
                 };
-                self.error(
-                    DiagnosticKind::TypeMismatch {
-                        expected: expected.into(),
-                        found,
-                    },
-                    chan.span,
-                );
+                let name = super::process::element_name(chan);
+                let kind = DiagnosticKind::WrongKind {
+                    name,
+                    expected,
+                    found: "a variable",
+                };
+                self.error(kind, chan.span);
                 End::Unknown
             }
         }
@@ -161,14 +160,23 @@ impl Checker {
     fn value_item(&mut self, ty: &Type, e: &Expr, input: bool) {
         if input {
             let p = self.place(e, Some(Mode::Write));
-            self.expect_type(ty, &p.ty, e.span);
+            self.expect_item(ty, &p.ty, e.span);
             if !p.assignable {
                 let name = super::process::element_name(e);
                 self.error(DiagnosticKind::NotAssignable { name }, e.span);
             }
         } else {
             let t = self.expr(e, Some(ty));
-            self.expect_type(ty, &t.ty, e.span);
+            self.expect_item(ty, &t.ty, e.span);
+        }
+    }
+
+    /// Reports an item whose type is not the protocol's.
+    fn expect_item(&mut self, want: &Type, found: &Type, span: ast::Span) {
+        if !self.out.types.compatible(want, found) {
+            let (w, f) = (self.out.types.display(want), self.out.types.display(found));
+            let what = format!("expected {w}, found {f}");
+            self.error(DiagnosticKind::Protocol { what }, span);
         }
     }
 

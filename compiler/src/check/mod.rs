@@ -19,6 +19,7 @@ mod place;
 mod process;
 mod scope;
 #[cfg(test)]
+#[rustfmt::skip]
 mod test;
 
 use std::collections::HashSet;
@@ -58,11 +59,59 @@ pub(crate) struct Checker {
     shared: HashSet<String>,
     permit_aliases: HashSet<String>,
     abbreviated: Vec<Abbreviated>,
+    /// Inside `SIZE` / `BYTESIN` operands, which name storage without using it.
+    quiet: u32,
+    options: Options,
+    /// Tables of non-linear subscripts evaluated per replicator value.
+    tables: crate::usage::Tables,
+    /// Index values of replicators with constant base, count and step (and a small count).
+    repl_values: std::collections::HashMap<SymbolId, Vec<i64>>,
+}
+
+/// Checks that a program can switch off, as occ21's `#OPTION` letters do.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Options {
+    /// Apply the PAR usage rules (`#OPTION "N"` switches them off).
+    pub usage: bool,
+    /// Apply the alias rules (`#OPTION "A"` switches them off).
+    pub alias: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            usage: true,
+            alias: true,
+        }
+    }
+}
+
+impl Options {
+    /// Reads the `#OPTION "..."` directives of a source text: `A` switches alias checking off and
+    /// `N` usage checking, as in occ21. Other letters are accepted and ignored.
+    pub fn from_source(text: &str) -> Options {
+        let mut o = Options::default();
+        for line in text.lines() {
+            let Some(rest) = line.trim_start().strip_prefix("#OPTION") else {
+                continue;
+            };
+            let letters = rest.trim().trim_matches('"');
+            for ch in letters.chars().take_while(|c| *c != '"') {
+                match ch.to_ascii_uppercase() {
+                    'A' => o.alias = false,
+                    'N' => o.usage = false,
+                    _ => {}
+                }
+            }
+        }
+        o
+    }
 }
 
 /// Checks a program; see [`crate::check`].
-pub(crate) fn run(program: &ast::Program) -> (CheckedProgram, Vec<Diagnostic>) {
+pub(crate) fn run(program: &ast::Program, options: Options) -> (CheckedProgram, Vec<Diagnostic>) {
     let mut c = Checker::new(program);
+    c.options = options;
     c.scope.open();
     for decl in &program.decls {
         c.decl(decl);
@@ -82,6 +131,10 @@ impl Checker {
             shared: HashSet::new(),
             permit_aliases: HashSet::new(),
             abbreviated: Vec::new(),
+            quiet: 0,
+            options: Options::default(),
+            tables: Vec::new(),
+            repl_values: std::collections::HashMap::new(),
         };
         for pragma in &program.pragmas {
             let set = match pragma.kind {
@@ -198,12 +251,24 @@ impl Checker {
     /// Records an access, following reference abbreviations to the storage they name, and
     /// checks it against live abbreviations.
     fn record(&mut self, symbol: SymbolId, mode: Mode, part: Part, span: Span) {
-        let mut access = Access {
+        if self.quiet > 0 {
+            return;
+        }
+        let (access, hops) = self.resolve_alias(Access {
             symbol,
             mode,
             part,
             span,
-        };
+        });
+        self.check_alias(access, &hops);
+        if let Some(frame) = self.frames.last_mut() {
+            frame.push(access);
+        }
+    }
+
+    /// Follows reference abbreviations from an access to the storage it touches; returns that
+    /// access and the abbreviations passed through.
+    fn resolve_alias(&self, mut access: Access) -> (Access, Vec<SymbolId>) {
         let mut hops: Vec<SymbolId> = Vec::new();
         for _ in 0..32 {
             match self.sym(access.symbol).alias_of {
@@ -216,38 +281,40 @@ impl Checker {
                     };
                     access = Access {
                         symbol: target.symbol,
-                        mode,
                         part,
-                        span,
+                        ..access
                     };
                 }
                 None => break,
             }
         }
-        self.check_alias(access, &hops);
-        if let Some(frame) = self.frames.last_mut() {
-            frame.push(access);
-        }
+        (access, hops)
     }
 
     /// Reports a direct use of storage that a live abbreviation names.
-    fn check_alias(&mut self, access: Access, hops: &[SymbolId]) {
+    /// Returns `false` when it reported one.
+    fn check_alias(&mut self, access: Access, hops: &[SymbolId]) -> bool {
+        if !self.options.alias {
+            return true;
+        }
         let name = &self.sym(access.symbol).name;
         if self.permit_aliases.contains(name) {
-            return;
+            return true;
         }
         let clash = self.abbreviated.iter().rev().find(|a| {
             a.target.symbol == access.symbol
                 && !hops.contains(&a.alias)
                 && (!a.val || access.mode == Mode::Write)
-                && may_overlap(a.target.part, access.part)
+                && may_overlap(&self.tables, a.target.part, access.part)
         });
         if let Some(a) = clash {
             let alias_span = self.sym(a.alias).span;
             let d = Diagnostic::error(DiagnosticKind::Alias { name: name.clone() }, access.span)
                 .with_related(alias_span, "abbreviated here");
             self.diags.push(d);
+            return false;
         }
+        true
     }
 
     /// Starts collecting accesses separately (a PAR branch or a PROC body).
@@ -258,6 +325,23 @@ impl Checker {
     /// Stops collecting separately and returns what was collected.
     fn pop_frame(&mut self) -> Vec<Access> {
         self.frames.pop().unwrap_or_default()
+    }
+
+    /// Returns a mark for [`Checker::hull_since`].
+    fn frame_mark(&self) -> usize {
+        self.frames.last().map_or(0, Vec::len)
+    }
+
+    /// When a replicator goes out of scope, replaces the parts of the accesses recorded since
+    /// `mark` that depend on its index by the hull of what they touch over all its values.
+    fn hull_since(&mut self, mark: usize, index: SymbolId) {
+        let values = self.repl_values.get(&index);
+        let Some(frame) = self.frames.last_mut() else {
+            return;
+        };
+        for a in frame.iter_mut().skip(mark) {
+            a.part = crate::usage::hull(&self.tables, a.part, index, values.map(Vec::as_slice));
+        }
     }
 
     /// Adds accesses to the innermost frame.

@@ -198,7 +198,7 @@ impl Checker {
         };
         let part = match self.linear(index) {
             Some(start) => Part::Range { start, len: 1 },
-            None => Part::Whole,
+            None => self.mapped(index).unwrap_or(Part::Whole),
         };
         self.finish_part(b, elem, part, value, mode, span)
     }
@@ -317,6 +317,59 @@ impl Checker {
             ExprKind::Binary { op, lhs, rhs } => {
                 let (l, r) = (self.linear(lhs)?, self.linear(rhs)?);
                 combine(*op, l, r)
+            }
+            _ => None,
+        }
+    }
+}
+
+impl Checker {
+    /// Evaluates a non-linear subscript for every value of the one replicator it depends on,
+    /// when that replicator's values are known (occ21 unrolls such replicators).
+    fn mapped(&mut self, e: &Expr) -> Option<Part> {
+        let var = self.repl_var(e)?;
+        let values = self.repl_values.get(&var)?;
+        let table: Option<Vec<(i64, i64)>> = values
+            .iter()
+            .map(|&v| self.eval_with(e, var, v).map(|s| (v, s)))
+            .collect();
+        self.tables.push(table?);
+        let table = u32::try_from(self.tables.len() - 1).ok()?;
+        Some(Part::Mapped { var, table, len: 1 })
+    }
+
+    /// Finds a replicator index used in `e`.
+    fn repl_var(&self, e: &Expr) -> Option<crate::checked::SymbolId> {
+        match &e.kind {
+            ExprKind::Name(n) => {
+                let id = *self.out.names.get(&n.span)?;
+                matches!(self.sym(id).kind, SymbolKind::Replicator).then_some(id)
+            }
+            ExprKind::Binary { lhs, rhs, .. } => self.repl_var(lhs).or_else(|| self.repl_var(rhs)),
+            ExprKind::Unary { operand, .. } => self.repl_var(operand),
+            _ => None,
+        }
+    }
+
+    /// Evaluates an INT expression with the replicator `var` set to `v`.
+    fn eval_with(&self, e: &Expr, var: crate::checked::SymbolId, v: i64) -> Option<i64> {
+        use crate::types::Prim;
+        if let Some(c) = self.out.constants.get(&e.span).and_then(Value::as_int) {
+            return Some(c);
+        }
+        match &e.kind {
+            ExprKind::Name(n) => (self.out.names.get(&n.span) == Some(&var)).then_some(v),
+            ExprKind::Binary { op, lhs, rhs } => {
+                let (l, r) = (self.eval_with(lhs, var, v)?, self.eval_with(rhs, var, v)?);
+                crate::consteval::binary(*op, Prim::Int, &Value::Int(l), &Value::Int(r))
+                    .ok()?
+                    .as_int()
+            }
+            ExprKind::Unary { op, operand } => {
+                let x = self.eval_with(operand, var, v)?;
+                crate::consteval::unary(*op, Prim::Int, &Value::Int(x))
+                    .ok()?
+                    .as_int()
             }
             _ => None,
         }

@@ -6,7 +6,7 @@ use super::Checker;
 use crate::consteval::Value;
 use crate::diagnostic::{Diagnostic, DiagnosticKind};
 use crate::types::Type;
-use crate::usage::{self, Access, Conflict, Mode, Part};
+use crate::usage::{self, Access, Conflict, Mode};
 
 /// The name at the root of an element (`a` in `a[i][j]`), for messages.
 pub(super) fn element_name(e: &Expr) -> String {
@@ -36,10 +36,12 @@ impl Checker {
             ProcessKind::Delay { timer, time } => self.delay(timer, time),
             ProcessKind::Seq { repl, body } => {
                 let mark = self.open_scope();
-                if let Some(r) = repl {
-                    self.replicator(r);
-                }
+                let frame = self.frame_mark();
+                let r = repl.as_ref().map(|r| self.replicator(r));
                 body.iter().for_each(|b| self.process(b));
+                if let Some(r) = r {
+                    self.hull_since(frame, r.id);
+                }
                 self.close_scope(mark);
             }
             ProcessKind::Par { repl, body, .. } => self.par(repl.as_deref(), body),
@@ -153,9 +155,8 @@ impl Checker {
 
     fn if_(&mut self, repl: Option<&ast::Replicator>, choices: &[ast::Choice]) {
         let mark = self.open_scope();
-        if let Some(r) = repl {
-            self.replicator(r);
-        }
+        let frame = self.frame_mark();
+        let r = repl.map(|r| self.replicator(r));
         for c in choices {
             let inner = self.open_scope();
             self.decls(&c.decls);
@@ -168,14 +169,16 @@ impl Checker {
             }
             self.close_scope(inner);
         }
+        if let Some(r) = r {
+            self.hull_since(frame, r.id);
+        }
         self.close_scope(mark);
     }
 
     fn alt(&mut self, alt: &ast::Alt) {
         let mark = self.open_scope();
-        if let Some(r) = &alt.repl {
-            self.replicator(r);
-        }
+        let frame = self.frame_mark();
+        let r = alt.repl.as_ref().map(|r| self.replicator(r));
         for a in &alt.alternatives {
             let inner = self.open_scope();
             self.decls(&a.decls);
@@ -200,6 +203,9 @@ impl Checker {
                 ast::AltKind::Nested(inner_alt) => self.alt(inner_alt),
             }
             self.close_scope(inner);
+        }
+        if let Some(r) = r {
+            self.hull_since(frame, r.id);
         }
         self.close_scope(mark);
     }
@@ -264,24 +270,26 @@ impl Checker {
         let mut found = Vec::new();
         for (j, later) in branches.iter().enumerate() {
             for earlier in branches.iter().take(j) {
-                found.extend(usage::conflicts(earlier, later, None, &|s| self.exempt(s)));
+                found.extend(usage::conflicts(&self.tables, earlier, later, None, &|s| {
+                    self.exempt(s)
+                }));
             }
             if let Some(r) = &r {
-                let values = r.values(4096);
+                let values = r.values(256);
                 let across = Some((r.id, values.as_deref()));
-                found.extend(usage::conflicts(later, later, across, &|s| self.exempt(s)));
+                found.extend(usage::conflicts(&self.tables, later, later, across, &|s| {
+                    self.exempt(s)
+                }));
             }
         }
         self.report_conflicts(&found);
         self.close_scope(mark);
-        let index = r.map(|r| r.id);
+        let frame = self.frame_mark();
         for branch in branches {
-            self.extend_frame(branch.into_iter().map(|mut a| {
-                if matches!(a.part, Part::Range { start, .. } if start.var.is_some() && start.var == index) {
-                    a.part = Part::Whole;
-                }
-                a
-            }));
+            self.extend_frame(branch);
+        }
+        if let Some(r) = r {
+            self.hull_since(frame, r.id);
         }
     }
 
@@ -296,6 +304,9 @@ impl Checker {
     }
 
     fn report_conflicts(&mut self, found: &[Conflict]) {
+        if !self.options.usage {
+            return;
+        }
         let mut reported: Vec<crate::checked::SymbolId> = Vec::new();
         for c in found {
             if reported.contains(&c.here.symbol) {

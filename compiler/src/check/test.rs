@@ -54,463 +54,109 @@ macro_rules! rejects {
 
 // Names and scope.
 accepts!(simple_proc, "PROC p ()\n  INT x:\n  x := 1\n:");
-rejects!(
-    undeclared_name,
-    "PROC p ()\n  INT x:\n  y := 1\n:",
-    3,
-    "`y` is not declared"
-);
-rejects!(
-    scope_ends_after_process,
-    "PROC p ()\n  SEQ\n    INT x:\n    x := 1\n    x := 2\n:",
-    5,
-    "`x` is not declared"
-);
-rejects!(
-    no_recursion,
-    "PROC p (VAL INT n)\n  p (n)\n:",
-    2,
-    "calls itself"
-);
-accepts!(
-    shadowing,
-    "PROC p ()\n  INT x:\n  SEQ\n    x := 1\n    BOOL x:\n    x := TRUE\n:"
-);
-rejects!(
-    duplicate_param,
-    "PROC p (INT a, INT a)\n  SKIP\n:",
-    1,
-    "declared twice"
-);
-accepts!(
-    nested_proc_uses_outer,
-    "PROC p ()\n  INT x:\n  PROC q ()\n    x := 1\n  :\n  q ()\n:"
-);
+rejects!(undeclared_name, "PROC p ()\n  INT x:\n  y := 1\n:", 3, "`y` is not declared");
+rejects!(scope_ends_after_process, "PROC p ()\n  SEQ\n    INT x:\n    x := 1\n    x := 2\n:", 5, "`x` is not declared");
+rejects!(no_recursion, "PROC p (VAL INT n)\n  p (n)\n:", 2, "calls itself");
+accepts!(shadowing, "PROC p ()\n  INT x:\n  SEQ\n    x := 1\n    BOOL x:\n    x := TRUE\n:");
+rejects!(duplicate_param, "PROC p (INT a, INT a)\n  SKIP\n:", 1, "declared twice");
+accepts!(nested_proc_uses_outer, "PROC p ()\n  INT x:\n  PROC q ()\n    x := 1\n  :\n  q ()\n:");
 
 // Types and literals.
-rejects!(
-    assign_bool_to_int,
-    "PROC p ()\n  INT x:\n  x := TRUE\n:",
-    3,
-    "type mismatch: expected INT, found BOOL"
-);
-rejects!(
-    byte_int_mix,
-    "PROC p ()\n  INT x:\n  BYTE b:\n  x := b\n:",
-    4,
-    "expected INT, found BYTE"
-);
-accepts!(
-    untyped_literal_takes_context,
-    "PROC p ()\n  INT16 s:\n  INT64 l:\n  REAL32 r:\n  SEQ\n    s := 5\n    l := 5\n    r := 2.5\n:"
-);
-accepts!(
-    untyped_literals_in_expressions,
-    "PROC p ()\n  INT16 s:\n  REAL64 r:\n  SEQ\n    s := s + 1\n    r := (r * 2.0) + 1.5\n:"
-);
-accepts!(
-    typed_literals,
-    "PROC p ()\n  INT64 l:\n  l := 5(INT64) + #FF(INT64)\n:"
-);
-accepts!(char_literal_as_int, "PROC p ()\n  INT x:\n  x := 'a'\n:");
-rejects!(
-    bad_operand_bool_plus,
-    "PROC p ()\n  BOOL b:\n  b := TRUE + FALSE\n:",
-    3,
-    "operator + cannot be applied to BOOL"
-);
-rejects!(
-    real_to_int_needs_round,
-    "PROC p ()\n  INT x:\n  REAL32 r:\n  x := INT r\n:",
-    4,
-    "needs ROUND or TRUNC"
-);
-accepts!(
-    conversions,
-    "PROC p ()\n  INT x:\n  REAL32 r:\n  BYTE b:\n  SEQ\n    x := INT ROUND r\n    r := REAL32 TRUNC x\n    b := BYTE x\n    x := INT b\n:"
-);
-rejects!(
-    string_to_int,
-    "PROC p ()\n  INT x:\n  x := \"ab\"\n:",
-    3,
-    "expected INT, found [2]BYTE"
-);
-accepts!(
-    string_to_byte_array,
-    "PROC p ()\n  [5]BYTE s:\n  s := \"hello\"\n:"
-);
-rejects!(
-    string_wrong_length,
-    "PROC p ()\n  [4]BYTE s:\n  s := \"hello\"\n:",
-    3,
-    "expected [4]BYTE, found [5]BYTE"
-);
+rejects!(assign_bool_to_int, "PROC p ()\n  INT x:\n  x := TRUE\n:", 3, "type mismatch: expected INT, found BOOL");
+rejects!(byte_int_mix, "PROC p ()\n  INT x:\n  BYTE b:\n  x := b\n:", 4, "expected INT, found BYTE");
+accepts!(untyped_literal_takes_context, "PROC p ()\n  INT16 s:\n  INT64 l:\n  REAL32 r:\n  SEQ\n    s := 5\n    l := 5\n    r := 2.5\n:");
+accepts!(untyped_literals_in_expressions, "PROC p ()\n  INT16 s:\n  REAL64 r:\n  SEQ\n    s := s + 1\n    r := (r * 2.0) + 1.5\n:");
+accepts!(typed_literals, "PROC p ()\n  INT64 l:\n  l := 5(INT64) + #FF(INT64)\n:");
+rejects!(char_literal_is_byte, "PROC p ()\n  INT x:\n  x := 'a'\n:", 3, "expected INT, found BYTE");
+accepts!(char_literal_decorated, "PROC p ()\n  INT x:\n  x := 'a'(INT)\n:");
+rejects!(bad_operand_bool_plus, "PROC p ()\n  BOOL b:\n  b := TRUE + FALSE\n:", 3, "operator + cannot be applied to BOOL");
+rejects!(real_to_int_needs_round, "PROC p ()\n  INT x:\n  REAL32 r:\n  x := INT r\n:", 4, "needs ROUND or TRUNC");
+accepts!(conversions, "PROC p ()\n  INT x:\n  REAL32 r:\n  BYTE b:\n  SEQ\n    x := INT ROUND r\n    r := REAL32 TRUNC x\n    b := BYTE x\n    x := INT b\n:");
+rejects!(string_to_int, "PROC p ()\n  INT x:\n  x := \"ab\"\n:", 3, "expected INT, found [2]BYTE");
+accepts!(string_to_byte_array, "PROC p ()\n  [5]BYTE s:\n  s := \"hello\"\n:");
+rejects!(string_wrong_length, "PROC p ()\n  [4]BYTE s:\n  s := \"hello\"\n:", 3, "expected [4]BYTE, found [5]BYTE");
 
 // Constants.
-rejects!(
-    constant_overflow_int16,
-    "VAL INT16 x IS 32767(INT16) + 1(INT16):\nPROC p ()\n  SKIP\n:",
-    1,
-    "constant overflow in INT16 expression"
-);
-rejects!(
-    constant_division_by_zero,
-    "VAL INT x IS 1 / 0:\nPROC p ()\n  SKIP\n:",
-    1,
-    "division by zero"
-);
-rejects!(
-    literal_out_of_range,
-    "VAL BYTE b IS 256:\nPROC p ()\n  SKIP\n:",
-    1,
-    "literal out of range for BYTE"
-);
-rejects!(
-    shift_out_of_range,
-    "VAL INT x IS 1 << 33:\nPROC p ()\n  SKIP\n:",
-    1,
-    "shift count 33"
-);
-accepts!(
-    mostneg_literal,
-    "VAL INT x IS -2147483648:\nVAL INT y IS MOSTNEG INT:\nPROC p ()\n  SKIP\n:"
-);
-accepts!(
-    modulo_ops_do_not_overflow,
-    "VAL INT x IS MOSTPOS INT PLUS 1:\nPROC p ()\n  SKIP\n:"
-);
-rejects!(
-    array_size_not_constant,
-    "PROC p (VAL INT n)\n  [n]INT a:\n  SKIP\n:",
-    2,
-    "array size must be a constant"
-);
-accepts!(
-    array_size_from_constants,
-    "VAL INT n IS 4:\nVAL []INT t IS [1, 2, 3]:\nPROC p ()\n  [n * SIZE t]INT a:\n  a[11] := 0\n:"
-);
-rejects!(
-    constant_subscript_out_of_range,
-    "PROC p ()\n  [4]INT a:\n  a[4] := 0\n:",
-    3,
-    "out of range"
-);
-rejects!(
-    case_duplicate,
-    "PROC p (VAL INT x)\n  CASE x\n    1\n      SKIP\n    1\n      SKIP\n:",
-    5,
-    "appears more than once"
-);
-rejects!(
-    case_not_constant,
-    "PROC p (VAL INT x, y)\n  CASE x\n    y\n      SKIP\n:",
-    3,
-    "CASE option must be a constant"
-);
+rejects!(constant_overflow_int16, "VAL INT16 x IS 32767(INT16) + 1(INT16):\nPROC p ()\n  SKIP\n:", 1, "constant overflow in INT16 expression");
+rejects!(constant_division_by_zero, "VAL INT x IS 1 / 0:\nPROC p ()\n  SKIP\n:", 1, "division by zero");
+rejects!(literal_out_of_range, "VAL BYTE b IS 256:\nPROC p ()\n  SKIP\n:", 1, "literal out of range for BYTE");
+rejects!(shift_out_of_range, "VAL INT x IS 1 << 33:\nPROC p ()\n  SKIP\n:", 1, "shift count 33");
+accepts!(mostneg_literal, "VAL INT x IS -2147483648:\nVAL INT y IS MOSTNEG INT:\nPROC p ()\n  SKIP\n:");
+accepts!(modulo_ops_do_not_overflow, "VAL INT x IS MOSTPOS INT PLUS 1:\nPROC p ()\n  SKIP\n:");
+rejects!(array_size_not_constant, "PROC p (VAL INT n)\n  [n]INT a:\n  SKIP\n:", 2, "array size must be a constant");
+accepts!(array_size_from_constants, "VAL INT n IS 4:\nVAL []INT t IS [1, 2, 3]:\nPROC p ()\n  [n * SIZE t]INT a:\n  a[11] := 0\n:");
+rejects!(constant_subscript_out_of_range, "PROC p ()\n  [4]INT a:\n  a[4] := 0\n:", 3, "out of range");
+rejects!(case_duplicate, "PROC p (VAL INT x)\n  CASE x\n    1\n      SKIP\n    1\n      SKIP\n:", 5, "appears more than once");
+rejects!(case_not_constant, "PROC p (VAL INT x, y)\n  CASE x\n    y\n      SKIP\n:", 3, "CASE option must be a constant");
 
 // Assignment and abbreviations.
-rejects!(
-    assign_to_val,
-    "PROC p (VAL INT x)\n  x := 1\n:",
-    2,
-    "`x` cannot be assigned"
-);
-rejects!(
-    assign_to_constant,
-    "VAL INT k IS 3:\nPROC p ()\n  k := 1\n:",
-    3,
-    "`k` cannot be assigned"
-);
-accepts!(
-    multiple_assignment,
-    "PROC p ()\n  INT a, b:\n  a, b := b, a\n:"
-);
-rejects!(
-    multiple_assignment_count,
-    "PROC p ()\n  INT a, b:\n  a, b := 1\n:",
-    3,
-    "expected 2 values, found 1"
-);
-accepts!(
-    multi_result_function,
-    "INT, INT FUNCTION f (VAL INT x) IS x, x + 1:\nPROC p ()\n  INT a, b:\n  a, b := f (1)\n:"
-);
-rejects!(
-    alias_use_while_abbreviated,
-    "PROC p ()\n  INT x:\n  INT y IS x:\n  SEQ\n    y := 1\n    x := 2\n:",
-    6,
-    "`x` is aliased"
-);
-accepts!(
-    abbreviate_disjoint_elements,
-    "PROC p ()\n  [4]INT a:\n  INT y IS a[0]:\n  SEQ\n    y := 1\n    a[1] := 2\n:"
-);
-rejects!(
-    val_abbrev_then_write,
-    "PROC p ()\n  INT x:\n  VAL INT y IS x:\n  x := y\n:",
-    4,
-    "`x` is aliased"
-);
-rejects!(
-    same_var_twice_by_reference,
-    "PROC q (INT a, INT b)\n  a, b := 1, 2\n:\nPROC p ()\n  INT x:\n  q (x, x)\n:",
-    6,
-    "`x` is aliased"
-);
-accepts!(
-    permit_aliases_pragma,
-    "PROC q (INT a, INT b)\n  a, b := 1, 2\n:\nPROC p ()\n  INT x:\n  #PRAGMA PERMITALIASES x\n  q (x, x)\n:"
-);
+rejects!(assign_to_val, "PROC p (VAL INT x)\n  x := 1\n:", 2, "`x` cannot be assigned");
+rejects!(assign_to_constant, "VAL INT k IS 3:\nPROC p ()\n  k := 1\n:", 3, "`k` cannot be assigned");
+accepts!(multiple_assignment, "PROC p ()\n  INT a, b:\n  a, b := b, a\n:");
+rejects!(multiple_assignment_count, "PROC p ()\n  INT a, b:\n  a, b := 1\n:", 3, "expected 2 values, found 1");
+accepts!(multi_result_function, "INT, INT FUNCTION f (VAL INT x) IS x, x + 1:\nPROC p ()\n  INT a, b:\n  a, b := f (1)\n:");
+rejects!(alias_use_while_abbreviated, "PROC p ()\n  INT x:\n  INT y IS x:\n  SEQ\n    y := 1\n    x := 2\n:", 6, "`x` is aliased");
+accepts!(abbreviate_disjoint_elements, "PROC p ()\n  [4]INT a:\n  INT y IS a[0]:\n  SEQ\n    y := 1\n    a[1] := 2\n:");
+rejects!(val_abbrev_then_write, "PROC p ()\n  INT x:\n  VAL INT y IS x:\n  x := y\n:", 4, "`x` is aliased");
+rejects!(same_var_twice_by_reference, "PROC q (INT a, INT b)\n  a, b := 1, 2\n:\nPROC p ()\n  INT x:\n  q (x, x)\n:", 6, "`x` is aliased");
+accepts!(permit_aliases_pragma, "PROC q (INT a, INT b)\n  a, b := 1, 2\n:\nPROC p ()\n  INT x:\n  #PRAGMA PERMITALIASES x\n  q (x, x)\n:");
 
 // Calls.
-rejects!(
-    argument_count,
-    "PROC q (VAL INT a)\n  SKIP\n:\nPROC p ()\n  q (1, 2)\n:",
-    5,
-    "takes 1 parameters, but 2 were given"
-);
-rejects!(
-    argument_type,
-    "PROC q (VAL INT a)\n  SKIP\n:\nPROC p ()\n  q (TRUE)\n:",
-    5,
-    "expected INT, found BOOL"
-);
-rejects!(
-    val_passed_by_reference,
-    "PROC q (INT a)\n  a := 1\n:\nPROC p (VAL INT v)\n  q (v)\n:",
-    5,
-    "`v` cannot be assigned"
-);
-accepts!(
-    open_array_parameter,
-    "PROC q (VAL []BYTE s)\n  SKIP\n:\nPROC p ()\n  q (\"hello\")\n:"
-);
-accepts!(
-    predefines_are_declared,
-    "PROC p ()\n  INT hi, lo:\n  REAL32 r:\n  SEQ\n    hi, lo := LONGPROD (3, 4, 0)\n    r := SQRT (2.0)\n    ASSERT (TRUE)\n:"
-);
-accepts!(
-    predefine_may_be_redeclared,
-    "INT FUNCTION ABS (VAL INT x) IS x:\nPROC p ()\n  INT y:\n  y := ABS (3)\n:"
-);
-rejects!(
-    proc_used_as_function,
-    "PROC q ()\n  SKIP\n:\nPROC p ()\n  INT x:\n  x := q ()\n:",
-    6,
-    "a FUNCTION is needed"
-);
+rejects!(argument_count, "PROC q (VAL INT a)\n  SKIP\n:\nPROC p ()\n  q (1, 2)\n:", 5, "takes 1 parameters, but 2 were given");
+rejects!(argument_type, "PROC q (VAL INT a)\n  SKIP\n:\nPROC p ()\n  q (TRUE)\n:", 5, "expected INT, found BOOL");
+rejects!(val_passed_by_reference, "PROC q (INT a)\n  a := 1\n:\nPROC p (VAL INT v)\n  q (v)\n:", 5, "`v` cannot be assigned");
+accepts!(open_array_parameter, "PROC q (VAL []BYTE s)\n  SKIP\n:\nPROC p ()\n  q (\"hello\")\n:");
+accepts!(predefines_are_declared, "PROC p ()\n  INT hi, lo:\n  REAL32 r:\n  SEQ\n    hi, lo := LONGPROD (3, 4, 0)\n    r := SQRT (2.0)\n    ASSERT (TRUE)\n:");
+accepts!(predefine_may_be_redeclared, "INT FUNCTION ABS (VAL INT x) IS x:\nPROC p ()\n  INT y:\n  y := ABS (3)\n:");
+rejects!(proc_used_as_function, "PROC q ()\n  SKIP\n:\nPROC p ()\n  INT x:\n  x := q ()\n:", 6, "a FUNCTION is needed");
 
 // Records, types, protocols.
-accepts!(
-    record_fields,
-    "DATA TYPE P\n  RECORD\n    INT x, y:\n:\nPROC p ()\n  P a:\n  SEQ\n    a[x] := 1\n    a[y] := a[x]\n:"
-);
-rejects!(
-    record_no_field,
-    "DATA TYPE P\n  RECORD\n    INT x:\n:\nPROC p ()\n  P a:\n  a[z] := 1\n:",
-    7,
-    "has no field `z`"
-);
-accepts!(
-    named_type_needs_conversion,
-    "DATA TYPE M IS INT:\nPROC p ()\n  M m:\n  INT i:\n  SEQ\n    m := M (i)\n    i := INT m\n    m := 3\n:"
-);
-rejects!(
-    named_types_are_distinct,
-    "DATA TYPE M IS INT:\nPROC p ()\n  M m:\n  INT i:\n  m := i\n:",
-    5,
-    "expected M, found INT"
-);
-accepts!(
-    bytesin_and_offsetof,
-    "DATA TYPE P\n  RECORD\n    BYTE b:\n    INT x:\n:\nVAL INT n IS BYTESIN (P):\nVAL INT o IS OFFSETOF (P, x):\nPROC p ()\n  [n + o]BYTE buf:\n  buf[7] := 0\n:"
-);
-accepts!(
-    sequential_protocol,
-    "PROTOCOL P IS INT; BYTE:\nPROC p (CHAN OF P c)\n  INT x:\n  BYTE b:\n  SEQ\n    c ! 1; 'a'\n    c ? x; b\n:"
-);
-rejects!(
-    sequential_protocol_count,
-    "PROTOCOL P IS INT; BYTE:\nPROC p (CHAN OF P c)\n  c ! 1\n:",
-    3,
-    "protocol mismatch"
-);
-accepts!(
-    counted_protocol,
-    "PROC p (CHAN OF INT::[]BYTE c)\n  [10]BYTE buf:\n  INT n:\n  SEQ\n    c ! 5 :: \"hello\"\n    c ? n :: buf\n:"
-);
-accepts!(
-    tagged_protocol,
-    "PROTOCOL T\n  CASE\n    a; INT\n    b\n:\nPROC p (CHAN OF T c)\n  INT x:\n  SEQ\n    c ! a; 1\n    c ! b\n    c ? CASE\n      a; x\n        SKIP\n      b\n        SKIP\n:"
-);
-rejects!(
-    tagged_protocol_bad_tag,
-    "PROTOCOL T\n  CASE\n    a; INT\n:\nPROC p (CHAN OF T c)\n  c ! z; 1\n:",
-    6,
-    "has no tag `z`"
-);
-rejects!(
-    output_wrong_type,
-    "PROC p (CHAN OF INT c)\n  c ! TRUE\n:",
-    2,
-    "expected INT, found BOOL"
-);
-rejects!(
-    direction_respected,
-    "PROC p (CHAN OF INT c?)\n  c ! 1\n:",
-    2,
-    "against its direction specifier"
-);
-accepts!(
-    timer_read_and_delay,
-    "PROC p ()\n  TIMER t:\n  INT now:\n  SEQ\n    t ? now\n    t ? AFTER now PLUS 100\n:"
-);
-accepts!(
-    chan_of_any,
-    "PROC p (CHAN OF ANY c)\n  INT x:\n  SEQ\n    c ! 1\n    c ? x\n:"
-);
+accepts!(record_fields, "DATA TYPE P\n  RECORD\n    INT x, y:\n:\nPROC p ()\n  P a:\n  SEQ\n    a[x] := 1\n    a[y] := a[x]\n:");
+rejects!(record_no_field, "DATA TYPE P\n  RECORD\n    INT x:\n:\nPROC p ()\n  P a:\n  a[z] := 1\n:", 7, "has no field `z`");
+accepts!(named_type_needs_conversion, "DATA TYPE M IS INT:\nPROC p ()\n  M m:\n  INT i:\n  SEQ\n    m := M (i)\n    i := INT m\n    m := 3\n:");
+rejects!(named_types_are_distinct, "DATA TYPE M IS INT:\nPROC p ()\n  M m:\n  INT i:\n  m := i\n:", 5, "expected M, found INT");
+accepts!(bytesin_and_offsetof, "DATA TYPE P\n  RECORD\n    BYTE b:\n    INT x:\n:\nVAL INT n IS BYTESIN (P):\nVAL INT o IS OFFSETOF (P, x):\nPROC p ()\n  [n + o]BYTE buf:\n  buf[7] := 0\n:");
+accepts!(sequential_protocol, "PROTOCOL P IS INT; BYTE:\nPROC p (CHAN OF P c)\n  INT x:\n  BYTE b:\n  SEQ\n    c ! 1; 'a'\n    c ? x; b\n:");
+rejects!(sequential_protocol_count, "PROTOCOL P IS INT; BYTE:\nPROC p (CHAN OF P c)\n  c ! 1\n:", 3, "protocol mismatch");
+accepts!(counted_protocol, "PROC p (CHAN OF INT::[]BYTE c)\n  [10]BYTE buf:\n  INT n:\n  SEQ\n    c ! 5 :: \"hello\"\n    c ? n :: buf\n:");
+accepts!(tagged_protocol, "PROTOCOL T\n  CASE\n    a; INT\n    b\n:\nPROC p (CHAN OF T c)\n  INT x:\n  SEQ\n    c ! a; 1\n    c ! b\n    c ? CASE\n      a; x\n        SKIP\n      b\n        SKIP\n:");
+rejects!(tagged_protocol_bad_tag, "PROTOCOL T\n  CASE\n    a; INT\n:\nPROC p (CHAN OF T c)\n  c ! z; 1\n:", 6, "has no tag `z`");
+rejects!(output_wrong_type, "PROC p (CHAN OF INT c)\n  c ! TRUE\n:", 2, "protocol mismatch: expected INT, found BOOL");
+rejects!(direction_respected, "PROC p (CHAN OF INT c?)\n  c ! 1\n:", 2, "against its direction specifier");
+accepts!(timer_read_and_delay, "PROC p ()\n  TIMER t:\n  INT now:\n  SEQ\n    t ? now\n    t ? AFTER now PLUS 100\n:");
+accepts!(chan_of_any, "PROC p (CHAN OF ANY c)\n  INT x:\n  SEQ\n    c ! 1\n    c ? x\n:");
 
 // PAR usage rules.
-rejects!(
-    par_write_read,
-    "PROC p ()\n  INT x, y:\n  PAR\n    x := 1\n    y := x\n:",
-    5,
-    "`x` is written in one branch of this PAR and used in another"
-);
-rejects!(
-    par_two_inputs,
-    "PROC p (CHAN OF INT c)\n  INT x, y:\n  PAR\n    c ? x\n    c ? y\n:",
-    5,
-    "`c` is used for input in more than one branch of this PAR"
-);
-accepts!(
-    par_one_input_one_output,
-    "PROC p ()\n  CHAN OF INT c:\n  INT x:\n  PAR\n    c ! 1\n    c ? x\n:"
-);
-accepts!(
-    par_disjoint_elements,
-    "PROC p ()\n  [4]INT a:\n  PAR\n    a[0] := 1\n    a[1] := 2\n:"
-);
-rejects!(
-    par_same_element,
-    "PROC p ()\n  [4]INT a:\n  PAR\n    a[1] := 1\n    a[1] := 2\n:",
-    5,
-    "`a` is written"
-);
-rejects!(
-    par_variable_subscript,
-    "PROC p (VAL INT i)\n  [4]INT a:\n  PAR\n    a[i] := 1\n    a[0] := 2\n:",
-    5,
-    "`a` is written"
-);
-accepts!(
-    replicated_par_by_index,
-    "PROC p ()\n  [4]INT a:\n  PAR i = 0 FOR 4\n    a[i] := i\n:"
-);
-rejects!(
-    replicated_par_shared_write,
-    "PROC p ()\n  INT x:\n  PAR i = 0 FOR 4\n    x := i\n:",
-    4,
-    "`x` is written"
-);
-rejects!(
-    replicated_par_neighbour,
-    "PROC p ()\n  [5]INT a:\n  PAR i = 0 FOR 4\n    a[i] := a[i + 1]\n:",
-    4,
-    "`a` is written"
-);
-accepts!(
-    replicated_par_channels,
-    "PROC p ([4]CHAN OF INT c)\n  PAR i = 0 FOR 4\n    c[i] ! i\n:"
-);
-accepts!(
-    par_slices_disjoint,
-    "PROC p ()\n  [8]INT a:\n  PAR\n    [a FROM 0 FOR 4] := [1, 2, 3, 4]\n    [a FROM 4 FOR 4] := [1, 2, 3, 4]\n:"
-);
-rejects!(
-    par_through_proc_call,
-    "PROC w (INT v)\n  v := 1\n:\nPROC p ()\n  INT x, y:\n  PAR\n    w (x)\n    y := x\n:",
-    8,
-    "`x` is written"
-);
-rejects!(
-    par_free_variable_in_proc,
-    "INT g:\nPROC w ()\n  g := 1\n:\nPROC p ()\n  PAR\n    w ()\n    w ()\n:",
-    8,
-    "`g` is written"
-);
-rejects!(
-    par_channel_through_proc,
-    "PROC r (CHAN OF INT c)\n  INT x:\n  c ? x\n:\nPROC p (CHAN OF INT c)\n  PAR\n    r (c)\n    r (c)\n:",
-    8,
-    "used for input in more than one branch"
-);
-accepts!(
-    par_timers_exempt,
-    "PROC p ()\n  TIMER t:\n  INT a, b:\n  PAR\n    t ? a\n    t ? b\n:"
-);
-accepts!(
-    par_shared_pragma,
-    "PROC p ()\n  INT x:\n  #PRAGMA SHARED x\n  PAR\n    x := 1\n    x := 2\n:"
-);
-accepts!(
-    par_locals_are_private,
-    "PROC p ()\n  PAR\n    INT x:\n    x := 1\n    INT x:\n    x := 2\n:"
-);
-rejects!(
-    par_through_abbreviation,
-    "PROC p ()\n  [4]INT a:\n  INT y IS a[1]:\n  PAR\n    y := 1\n    y := 2\n:",
-    6,
-    "`a` is written"
-);
+rejects!(par_write_read, "PROC p ()\n  INT x, y:\n  PAR\n    x := 1\n    y := x\n:", 5, "`x` is written in one branch of this PAR and used in another");
+rejects!(par_two_inputs, "PROC p (CHAN OF INT c)\n  INT x, y:\n  PAR\n    c ? x\n    c ? y\n:", 5, "`c` is used for input in more than one branch of this PAR");
+accepts!(par_one_input_one_output, "PROC p ()\n  CHAN OF INT c:\n  INT x:\n  PAR\n    c ! 1\n    c ? x\n:");
+accepts!(par_disjoint_elements, "PROC p ()\n  [4]INT a:\n  PAR\n    a[0] := 1\n    a[1] := 2\n:");
+rejects!(par_same_element, "PROC p ()\n  [4]INT a:\n  PAR\n    a[1] := 1\n    a[1] := 2\n:", 5, "`a` is written");
+rejects!(par_variable_subscript, "PROC p (VAL INT i)\n  [4]INT a:\n  PAR\n    a[i] := 1\n    a[0] := 2\n:", 5, "`a` is written");
+accepts!(replicated_par_by_index, "PROC p ()\n  [4]INT a:\n  PAR i = 0 FOR 4\n    a[i] := i\n:");
+rejects!(replicated_par_shared_write, "PROC p ()\n  INT x:\n  PAR i = 0 FOR 4\n    x := i\n:", 4, "`x` is written");
+rejects!(replicated_par_neighbour, "PROC p ()\n  [5]INT a:\n  PAR i = 0 FOR 4\n    a[i] := a[i + 1]\n:", 4, "`a` is written");
+accepts!(replicated_par_channels, "PROC p ([4]CHAN OF INT c)\n  PAR i = 0 FOR 4\n    c[i] ! i\n:");
+accepts!(par_slices_disjoint, "PROC p ()\n  [8]INT a:\n  PAR\n    [a FROM 0 FOR 4] := [1, 2, 3, 4]\n    [a FROM 4 FOR 4] := [1, 2, 3, 4]\n:");
+rejects!(par_through_proc_call, "PROC w (INT v)\n  v := 1\n:\nPROC p ()\n  INT x, y:\n  PAR\n    w (x)\n    y := x\n:", 8, "`x` is written");
+rejects!(par_free_variable_in_proc, "INT g:\nPROC w ()\n  g := 1\n:\nPROC p ()\n  PAR\n    w ()\n    w ()\n:", 8, "`g` is written");
+rejects!(par_channel_through_proc, "PROC r (CHAN OF INT c)\n  INT x:\n  c ? x\n:\nPROC p (CHAN OF INT c)\n  PAR\n    r (c)\n    r (c)\n:", 8, "used for input in more than one branch");
+accepts!(par_timers_exempt, "PROC p ()\n  TIMER t:\n  INT a, b:\n  PAR\n    t ? a\n    t ? b\n:");
+accepts!(par_shared_pragma, "PROC p ()\n  INT x:\n  #PRAGMA SHARED x\n  PAR\n    x := 1\n    x := 2\n:");
+accepts!(par_locals_are_private, "PROC p ()\n  PAR\n    INT x:\n    x := 1\n    INT x:\n    x := 2\n:");
+rejects!(par_through_abbreviation, "PROC p ()\n  [4]INT a:\n  INT y IS a[1]:\n  PAR\n    y := 1\n    y := 2\n:", 6, "`a` is written");
 
 // Expressions.
-accepts!(
-    size_of_array,
-    "PROC p ([]INT a)\n  SEQ i = 0 FOR SIZE a\n    a[i] := 0\n:"
-);
-accepts!(
-    slices_and_tables,
-    "PROC p ()\n  [10]INT a:\n  VAL []INT t IS [1, 2, 3]:\n  SEQ\n    [a FROM 2 FOR 3] := t\n    [a FOR 3] := [a FROM 7]\n:"
-);
-accepts!(
-    function_valof,
-    "INT FUNCTION sq (VAL INT x)\n  INT r:\n  VALOF\n    r := x * x\n    RESULT r\n:\nPROC p ()\n  INT y:\n  y := sq (3)\n:"
-);
-rejects!(
-    function_result_type,
-    "INT FUNCTION f (VAL INT x) IS TRUE:\nPROC p ()\n  SKIP\n:",
-    1,
-    "expected INT, found BOOL"
-);
-accepts!(
-    if_while_case,
-    "PROC p (VAL INT n)\n  INT x:\n  SEQ\n    x := 0\n    WHILE x < n\n      x := x + 1\n    IF\n      x = n\n        SKIP\n      TRUE\n        STOP\n    CASE x\n      0, 1\n        SKIP\n      ELSE\n        SKIP\n:"
-);
-rejects!(
-    while_needs_bool,
-    "PROC p ()\n  INT x:\n  WHILE x\n    SKIP\n:",
-    3,
-    "expected BOOL, found INT"
-);
-accepts!(
-    alt_guards,
-    "PROC p (CHAN OF INT a, b)\n  TIMER t:\n  INT x, now:\n  SEQ\n    t ? now\n    ALT\n      a ? x\n        SKIP\n      (x > 0) & b ? x\n        SKIP\n      t ? AFTER now\n        SKIP\n      TRUE & SKIP\n        SKIP\n:"
-);
-accepts!(
-    replicated_alt,
-    "PROC p ([4]CHAN OF INT c)\n  INT x:\n  ALT i = 0 FOR 4\n    c[i] ? x\n      SKIP\n:"
-);
-rejects!(
-    retypes_size,
-    "PROC p ()\n  INT x:\n  [2]BYTE b RETYPES x:\n  SKIP\n:",
-    3,
-    "RETYPES size mismatch"
-);
-accepts!(
-    retypes_ok,
-    "PROC p ()\n  INT x:\n  [4]BYTE b RETYPES x:\n  VAL INT32 y RETYPES 1.0(REAL32):\n  b[0] := 1\n:"
-);
+accepts!(size_of_array, "PROC p ([]INT a)\n  SEQ i = 0 FOR SIZE a\n    a[i] := 0\n:");
+accepts!(slices_and_tables, "PROC p ()\n  [10]INT a:\n  VAL []INT t IS [1, 2, 3]:\n  SEQ\n    [a FROM 2 FOR 3] := t\n    [a FOR 3] := [a FROM 7]\n:");
+accepts!(function_valof, "INT FUNCTION sq (VAL INT x)\n  INT r:\n  VALOF\n    r := x * x\n    RESULT r\n:\nPROC p ()\n  INT y:\n  y := sq (3)\n:");
+rejects!(function_result_type, "INT FUNCTION f (VAL INT x) IS TRUE:\nPROC p ()\n  SKIP\n:", 1, "expected INT, found BOOL");
+accepts!(if_while_case, "PROC p (VAL INT n)\n  INT x:\n  SEQ\n    x := 0\n    WHILE x < n\n      x := x + 1\n    IF\n      x = n\n        SKIP\n      TRUE\n        STOP\n    CASE x\n      0, 1\n        SKIP\n      ELSE\n        SKIP\n:");
+rejects!(while_needs_bool, "PROC p ()\n  INT x:\n  WHILE x\n    SKIP\n:", 3, "expected BOOL, found INT");
+accepts!(alt_guards, "PROC p (CHAN OF INT a, b)\n  TIMER t:\n  INT x, now:\n  SEQ\n    t ? now\n    ALT\n      a ? x\n        SKIP\n      (x > 0) & b ? x\n        SKIP\n      t ? AFTER now\n        SKIP\n      TRUE & SKIP\n        SKIP\n:");
+accepts!(replicated_alt, "PROC p ([4]CHAN OF INT c)\n  INT x:\n  ALT i = 0 FOR 4\n    c[i] ? x\n      SKIP\n:");
+rejects!(retypes_size, "PROC p ()\n  INT x:\n  [2]BYTE b RETYPES x:\n  SKIP\n:", 3, "RETYPES size mismatch");
+accepts!(retypes_ok, "PROC p ()\n  INT x:\n  [4]BYTE b RETYPES x:\n  VAL INT32 y RETYPES 1.0(REAL32):\n  b[0] := 1\n:");
 
 #[test]
 fn every_error_is_reported_not_just_the_first() {
@@ -546,23 +192,8 @@ macro_rules! snapshot {
 }
 
 snapshot!(snapshot_undeclared, "PROC p ()\n  x := 1\n:");
-snapshot!(
-    snapshot_type_mismatch,
-    "PROC p ()\n  INT x:\n  x := TRUE\n:"
-);
-snapshot!(
-    snapshot_par_usage,
-    "PROC p ()\n  INT x, y:\n  PAR\n    x := 1\n    y := x\n:"
-);
-snapshot!(
-    snapshot_par_channel,
-    "PROC p (CHAN OF INT c)\n  INT x, y:\n  PAR\n    c ? x\n    c ? y\n:"
-);
-snapshot!(
-    snapshot_constant_overflow,
-    "VAL INT16 x IS 32767(INT16) + 1(INT16):"
-);
-snapshot!(
-    snapshot_needs_rounding,
-    "PROC p (VAL REAL32 r)\n  INT x:\n  x := INT r\n:"
-);
+snapshot!(snapshot_type_mismatch, "PROC p ()\n  INT x:\n  x := TRUE\n:");
+snapshot!(snapshot_par_usage, "PROC p ()\n  INT x, y:\n  PAR\n    x := 1\n    y := x\n:");
+snapshot!(snapshot_par_channel, "PROC p (CHAN OF INT c)\n  INT x, y:\n  PAR\n    c ? x\n    c ? y\n:");
+snapshot!(snapshot_constant_overflow, "VAL INT16 x IS 32767(INT16) + 1(INT16):");
+snapshot!(snapshot_needs_rounding, "PROC p (VAL REAL32 r)\n  INT x:\n  x := INT r\n:");

@@ -49,15 +49,6 @@ impl Lin {
     pub fn constant(b: i64) -> Lin {
         Lin { var: None, a: 0, b }
     }
-
-    /// Evaluates with `var` set to `value` (if this is a function of `index`).
-    fn at(self, index: SymbolId, value: i64) -> Lin {
-        if self.var == Some(index) {
-            Lin::constant(self.a.saturating_mul(value).saturating_add(self.b))
-        } else {
-            self
-        }
-    }
 }
 
 /// Which part of a symbol an access touches (first dimension or record field only).
@@ -72,6 +63,71 @@ pub enum Part {
         /// How many elements.
         len: i64,
     },
+    /// Elements `f(var) .. f(var) + len` where `f` is not linear (`(i + 1) \ n`) but was
+    /// evaluated for every value of the replicator index `var`: `table` indexes [`Tables`].
+    Mapped {
+        /// The replicator index.
+        var: SymbolId,
+        /// The table of `(index value, first element)` pairs.
+        table: u32,
+        /// How many elements.
+        len: i64,
+    },
+}
+
+/// The tables of [`Part::Mapped`] subscripts: `(index value, first element)` pairs.
+pub type Tables = Vec<Vec<(i64, i64)>>;
+
+/// Returns the elements `(start, len)` a part touches when `index` has value `v`, if that is
+/// known without other replicators.
+fn concrete(tables: &Tables, p: Part, index: SymbolId, v: i64) -> Option<(i64, i64)> {
+    match p {
+        Part::Whole => None,
+        Part::Range { start, len } => match start.var {
+            None => Some((start.b, len)),
+            Some(x) if x == index => Some((start.a.saturating_mul(v).saturating_add(start.b), len)),
+            Some(_) => None,
+        },
+        Part::Mapped { var, table, len } if var == index => {
+            let t = tables.get(table as usize)?;
+            t.iter().find(|(x, _)| *x == v).map(|(_, s)| (*s, len))
+        }
+        Part::Mapped { .. } => None,
+    }
+}
+
+fn ranges_overlap((s, n): (i64, i64), (t, m): (i64, i64)) -> bool {
+    s < t.saturating_add(m) && t < s.saturating_add(n)
+}
+
+/// Replaces the dependence of a part on the replicator `index` by the hull of the elements it
+/// touches over `values` (or the whole symbol when the values are unknown): used when the
+/// replicator goes out of scope.
+pub fn hull(tables: &Tables, p: Part, index: SymbolId, values: Option<&[i64]>) -> Part {
+    let depends = match p {
+        Part::Range { start, .. } => start.var == Some(index),
+        Part::Mapped { var, .. } => var == index,
+        Part::Whole => false,
+    };
+    if !depends {
+        return p;
+    }
+    let Some(values) = values.filter(|v| !v.is_empty()) else {
+        return Part::Whole;
+    };
+    let mut lo = i64::MAX;
+    let mut hi = i64::MIN;
+    for &v in values {
+        let Some((s, n)) = concrete(tables, p, index, v) else {
+            return Part::Whole;
+        };
+        lo = lo.min(s);
+        hi = hi.max(s.saturating_add(n));
+    }
+    Part::Range {
+        start: Lin::constant(lo),
+        len: hi.saturating_sub(lo),
+    }
 }
 
 /// One access to a symbol.
@@ -88,44 +144,83 @@ pub struct Access {
 }
 
 /// Reports whether two parts may overlap, with both evaluated in the same instance.
-pub fn may_overlap(p: Part, q: Part) -> bool {
+pub fn may_overlap(tables: &Tables, p: Part, q: Part) -> bool {
     match (p, q) {
         // Same function of the same index: compare the constant offsets.
         (Part::Range { start: s, len: n }, Part::Range { start: t, len: m })
             if s.var == t.var && s.a == t.a =>
         {
-            s.b < t.b.saturating_add(m) && t.b < s.b.saturating_add(n)
+            ranges_overlap((s.b, n), (t.b, m))
+        }
+        (Part::Mapped { var, .. }, _) | (_, Part::Mapped { var, .. }) => {
+            let Some(t) = mapped_values(tables, p).or_else(|| mapped_values(tables, q)) else {
+                return true;
+            };
+            t.iter().any(
+                |&v| match (concrete(tables, p, var, v), concrete(tables, q, var, v)) {
+                    (Some(a), Some(b)) => ranges_overlap(a, b),
+                    _ => true,
+                },
+            )
         }
         _ => true,
     }
 }
 
+fn mapped_values(tables: &Tables, p: Part) -> Option<Vec<i64>> {
+    match p {
+        Part::Mapped { table, .. } => Some(
+            tables
+                .get(table as usize)?
+                .iter()
+                .map(|(v, _)| *v)
+                .collect(),
+        ),
+        _ => None,
+    }
+}
+
 /// Reports whether `p` in one instance and `q` in another instance of a replicated PAR over
 /// `index` may overlap. `values` are the index values when the count is a (small) constant.
-pub fn may_overlap_across(p: Part, q: Part, index: SymbolId, values: Option<&[i64]>) -> bool {
-    let (Part::Range { start: s, len: n }, Part::Range { start: t, len: m }) = (p, q) else {
-        return true;
-    };
-    if s.var != Some(index) && t.var != Some(index) {
-        return may_overlap(p, q);
-    }
-    match values {
-        Some(vals) => vals.iter().enumerate().any(|(k, &i)| {
+pub fn may_overlap_across(
+    tables: &Tables,
+    p: Part,
+    q: Part,
+    index: SymbolId,
+    values: Option<&[i64]>,
+) -> bool {
+    if let Some(vals) = values {
+        return vals.iter().enumerate().any(|(k, &i)| {
             vals.iter().enumerate().any(|(l, &j)| {
                 k != l
-                    && may_overlap(
-                        Part::Range {
-                            start: s.at(index, i),
-                            len: n,
-                        },
-                        Part::Range {
-                            start: t.at(index, j),
-                            len: m,
-                        },
-                    )
+                    && match (concrete(tables, p, index, i), concrete(tables, q, index, j)) {
+                        (Some(a), Some(b)) => ranges_overlap(a, b),
+                        _ => {
+                            depends_on_other(p, index)
+                                || depends_on_other(q, index)
+                                || may_overlap(tables, p, q)
+                        }
+                    }
             })
-        }),
-        None => !(s.var == t.var && s.a == t.a && s.a != 0 && s.b == t.b && n == 1 && m == 1),
+        });
+    }
+    match (p, q) {
+        (Part::Range { start: s, len: n }, Part::Range { start: t, len: m })
+            if s.var == Some(index) && t.var == Some(index) =>
+        {
+            !(s.a == t.a && s.a != 0 && s.b == t.b && n == 1 && m == 1)
+        }
+        _ => true,
+    }
+}
+
+/// Reports whether a part depends on a replicator other than `index` (then it cannot be
+/// compared across instances and counts as overlapping).
+fn depends_on_other(p: Part, index: SymbolId) -> bool {
+    match p {
+        Part::Range { start, .. } => start.var.is_some_and(|v| v != index),
+        Part::Mapped { var, .. } => var != index,
+        Part::Whole => true,
     }
 }
 
@@ -151,6 +246,7 @@ fn modes_conflict(a: Mode, b: Mode) -> bool {
 /// the two sets are two instances of one replicated body. Returns at most one conflict per
 /// symbol.
 pub fn conflicts(
+    tables: &Tables,
     first: &[Access],
     second: &[Access],
     across: Option<(SymbolId, Option<&[i64]>)>,
@@ -165,8 +261,10 @@ pub fn conflicts(
             a.symbol == b.symbol
                 && modes_conflict(a.mode, b.mode)
                 && match across {
-                    Some((index, values)) => may_overlap_across(a.part, b.part, index, values),
-                    None => may_overlap(a.part, b.part),
+                    Some((index, values)) => {
+                        may_overlap_across(tables, a.part, b.part, index, values)
+                    }
+                    None => may_overlap(tables, a.part, b.part),
                 }
         });
         if let Some(a) = hit {
