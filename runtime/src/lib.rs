@@ -5,8 +5,8 @@
 //! [`abi::ABI_TABLE`]; [`abi`] states the whole contract. A [`Node`] runs them: its scheduler
 //! ([`sched`]), channels ([`chan`]), ALT ([`alt`]), timers ([`timer`]), PAR ([`par`]), errors
 //! ([`error`]) and deadlock reports ([`deadlock`]). Nodes own all their state, so many run in one
-//! OS process; [`Network`] joins them with links and [`Network::run_all`] runs them, one thread
-//! per node.
+//! OS process; [`Network`] joins them with links, and [`Network::run_all`] (one thread per node)
+//! or [`Network::run_pool`] (a few threads for many nodes) runs them.
 //!
 //! # What codegen registers
 //!
@@ -91,6 +91,7 @@ pub mod link;
 mod mailbox;
 pub mod node;
 pub mod par;
+mod pool;
 pub mod program;
 pub mod sched;
 pub mod stats;
@@ -103,4 +104,5 @@ pub use host::HostIo;
 pub use link::Network;
 pub use node::{Node, NodeConfig};
 pub use program::{ChannelName, ProcInfo, ProgramInfo, SourceLoc};
+pub use sched::Idle;
 pub use stats::Stats;

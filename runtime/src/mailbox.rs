@@ -12,6 +12,7 @@ use std::sync::{Condvar, Mutex};
 use std::time::Duration;
 
 use crate::abi::Word;
+use crate::pool::Waker;
 
 /// One posted descriptor.
 struct Mail {
@@ -26,6 +27,8 @@ pub(crate) struct Mailbox {
     sleeping: AtomicBool,
     lock: Mutex<()>,
     wake: Condvar,
+    /// Set while a thread pool runs the node: called after each post instead of the condvar.
+    waker: AtomicPtr<Waker>,
 }
 
 impl std::fmt::Debug for Mail {
@@ -50,9 +53,36 @@ impl Mailbox {
                 Err(h) => head = h,
             }
         }
-        if self.sleeping.load(SeqCst) {
+        let waker = self.waker.load(SeqCst);
+        if !waker.is_null() {
+            // SAFETY: a waker stays valid until `clear_waker`, which runs only when no node of
+            // the pool runs any more (so nothing posts).
+            let w = unsafe { &*waker };
+            w.pool.wake(w.index);
+        } else if self.sleeping.load(SeqCst) {
             let _guard = self.lock.lock().unwrap_or_else(|p| p.into_inner());
             self.wake.notify_one();
+        }
+    }
+
+    /// Routes wake-ups to a thread pool (see [`crate::Network::run_pool`]).
+    pub(crate) fn set_waker(&self, w: Waker) {
+        let old = self.waker.swap(Box::into_raw(Box::new(w)), SeqCst);
+        if !old.is_null() {
+            // SAFETY: `old` came from Box::into_raw here and nothing uses it (the previous pool
+            // has finished).
+            drop(unsafe { Box::from_raw(old) });
+        }
+    }
+
+    /// Stops routing wake-ups to a pool.
+    ///
+    /// Only called when no node that could post here is running.
+    pub(crate) fn clear_waker(&self) {
+        let old = self.waker.swap(std::ptr::null_mut(), SeqCst);
+        if !old.is_null() {
+            // SAFETY: as in `set_waker`.
+            drop(unsafe { Box::from_raw(old) });
         }
     }
 
@@ -93,6 +123,7 @@ impl Mailbox {
 impl Drop for Mailbox {
     fn drop(&mut self) {
         drop(self.take_all());
+        self.clear_waker();
     }
 }
 

@@ -22,6 +22,18 @@ use crate::node::Node;
 /// Dispatches between two reads of the clock for the timer queues while processes are runnable.
 const TIMER_CHECK_INTERVAL: u64 = 64;
 
+/// Why [`Node::run_until_idle`] returned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Idle {
+    /// Every process has ended.
+    Finished,
+    /// Processes wait for a timer (due in `timer`) and/or for link traffic.
+    Waiting {
+        /// Time until the earliest timer, if any is pending.
+        timer: Option<std::time::Duration>,
+    },
+}
+
 impl Node {
     /// Makes the process `desc` (Wptr | priority) runnable at the back of its queue.
     ///
@@ -157,17 +169,41 @@ impl Node {
         }
     }
 
-    /// The main loop of [`Node::run`].
+    /// The main loop of [`Node::run`]: runs until idle, waits for a timer or link traffic (or
+    /// reports a network deadlock), and so on until every process has ended.
     pub(crate) fn run_loop(&mut self) -> Result<(), RunError> {
         loop {
-            match self.next_frame() {
-                Some(ws) => self.dispatch(ws)?,
-                None => {
-                    if !self.idle()? {
-                        return Ok(());
-                    }
-                }
+            match self.run_until_idle()? {
+                Idle::Finished => return Ok(()),
+                Idle::Waiting { timer } => self.wait_for_events(timer)?,
             }
+        }
+    }
+
+    /// Runs processes until none is runnable, without blocking the OS thread.
+    ///
+    /// Returns [`Idle::Finished`] when every process has ended, [`Idle::Waiting`] when the
+    /// remaining processes wait for a timer or for link traffic (another node's mail), and a
+    /// local deadlock as an error. The caller decides how to wait: [`Node::run`] sleeps on the
+    /// node's mailbox; a pool of threads runs other nodes meanwhile.
+    pub fn run_until_idle(&mut self) -> Result<Idle, RunError> {
+        loop {
+            while let Some(ws) = self.next_frame() {
+                self.dispatch(ws)?;
+            }
+            self.poll_events();
+            if !self.queues[0].front.is_null() || !self.queues[1].front.is_null() {
+                continue;
+            }
+            if self.timers[0].is_null() && self.timers[1].is_null() && self.link_waiters == 0 {
+                if self.live.is_null() {
+                    return Ok(Idle::Finished);
+                }
+                return Err(RunError::Deadlock(self.deadlock_report()));
+            }
+            return Ok(Idle::Waiting {
+                timer: self.time_to_next_timer(),
+            });
         }
     }
 
@@ -197,19 +233,6 @@ impl Node {
                 Status(other) => return Err(RunError::BadStatus(other)),
             }
         }
-    }
-
-    /// Handles a node with nothing runnable. Returns `Ok(true)` to go on, `Ok(false)` when every
-    /// process has ended.
-    fn idle(&mut self) -> Result<bool, RunError> {
-        if self.timers[0].is_null() && self.timers[1].is_null() && self.link_waiters == 0 {
-            if self.live.is_null() {
-                return Ok(false);
-            }
-            return Err(RunError::Deadlock(self.deadlock_report()));
-        }
-        self.wait_for_events()?;
-        Ok(true)
     }
 
     /// Adds a root to the live list.

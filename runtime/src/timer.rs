@@ -131,18 +131,25 @@ impl Node {
         best
     }
 
-    /// Blocks the OS thread until a timer is due or the link mailbox has mail, then handles both.
-    pub(crate) fn wait_for_events(&mut self) -> Result<(), crate::RunError> {
-        let timeout = self.earliest_timer().map(|t| {
+    /// Time until the earliest pending timer, if any.
+    pub(crate) fn time_to_next_timer(&self) -> Option<Duration> {
+        self.earliest_timer().map(|t| {
             let delta = (t as i32).wrapping_sub(self.now() as i32);
             Duration::from_micros(delta.max(0) as u64)
-        });
+        })
+    }
+
+    /// Blocks the OS thread until the timer (due in `timer`) or, when frames wait on links, until
+    /// mail arrives; reports a network deadlock when no node can move.
+    pub(crate) fn wait_for_events(
+        &mut self,
+        timer: Option<Duration>,
+    ) -> Result<(), crate::RunError> {
         if self.link_waiters > 0 {
-            self.wait_mailbox(timeout)?;
-        } else if let Some(d) = timeout {
+            self.wait_mailbox(timer)?;
+        } else if let Some(d) = timer {
             std::thread::sleep(d);
         }
-        self.poll_events();
         Ok(())
     }
 }

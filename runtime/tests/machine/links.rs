@@ -215,35 +215,40 @@ unsafe extern "C" fn ring_node(ws: Wptr, node: *mut Node) -> Status {
     }
 }
 
-#[test]
-fn a_ring_of_eight_nodes_passes_a_token() {
-    const NODES: usize = 8;
-    const ROUNDS: Word = 50;
+/// Builds a ring of `nodes` nodes passing a token `rounds` times; runs it with `run`; checks the
+/// token's final value.
+fn ring_of_nodes(
+    nodes: usize,
+    rounds: Word,
+    run: impl FnOnce(Vec<Box<Node>>) -> Vec<(Box<Node>, Result<(), RunError>)>,
+) {
     let net = Network::new();
-    let mut nodes: Vec<Box<Node>> = (0..NODES).map(|_| node().0).collect();
-    for n in nodes.iter_mut() {
+    let mut all: Vec<Box<Node>> = (0..nodes).map(|_| node().0).collect();
+    for n in all.iter_mut() {
         net.join(n);
     }
     let mut ends = Vec::new(); // (out of i, in of i+1)
-    for i in 0..NODES {
-        let (a, b) = nodes.split_at_mut(i.max((i + 1) % NODES));
-        let (from, to) = if i + 1 < NODES {
+    for i in 0..nodes {
+        let j = (i + 1) % nodes;
+        let (from, to) = if i < j {
+            let (a, b) = all.split_at_mut(j);
             (&mut a[i], &mut b[0])
         } else {
-            (&mut b[0], &mut a[0])
+            let (a, b) = all.split_at_mut(i);
+            (&mut b[0], &mut a[j])
         };
-        ends.push(net.connect(from, to, &format!("{i}->{}", (i + 1) % NODES)));
+        ends.push(net.connect(from, to, &format!("{i}->{j}")));
     }
     let mut first_ws = 0usize;
-    for (i, n) in nodes.iter_mut().enumerate() {
+    for (i, n) in all.iter_mut().enumerate() {
         let out = ends[i].0 as Word;
-        let inp = ends[(i + NODES - 1) % NODES].1 as Word;
-        let ws = spawn(n, ring_node, 6, &[out, inp, ROUNDS, 0, 0, (i == 0) as Word]);
+        let inp = ends[(i + nodes - 1) % nodes].1 as Word;
+        let ws = spawn(n, ring_node, 6, &[out, inp, rounds, 0, 0, (i == 0) as Word]);
         if i == 0 {
             first_ws = ws as usize;
         }
     }
-    let results = Network::run_all(nodes);
+    let results = run(all);
     let outcomes: Vec<String> = results
         .iter()
         .map(|(n, r)| format!("{r:?} comms={}", n.stats().communications))
@@ -251,8 +256,69 @@ fn a_ring_of_eight_nodes_passes_a_token() {
     for (_, r) in &results {
         assert!(r.is_ok(), "{outcomes:#?}");
     }
-    // Each of the 8 nodes adds 1 per round.
-    unsafe { assert_eq!(*l(first_ws as Wptr, 4), NODES as Word * ROUNDS) };
+    // Each node adds 1 per round.
+    unsafe { assert_eq!(*l(first_ws as Wptr, 4), nodes as Word * rounds) };
+}
+
+#[test]
+fn a_ring_of_eight_nodes_passes_a_token() {
+    ring_of_nodes(8, 50, Network::run_all);
+}
+
+#[test]
+fn a_ring_of_64_nodes_on_a_pool_of_two_threads() {
+    ring_of_nodes(64, 20, |n| Network::run_pool(n, 2));
+}
+
+#[test]
+fn a_ring_of_nodes_on_a_single_thread() {
+    ring_of_nodes(16, 10, |n| Network::run_pool(n, 1));
+}
+
+#[test]
+fn pool_reports_a_network_deadlock() {
+    let net = Network::new();
+    let (mut a, _) = node();
+    let (mut b, _) = node();
+    net.join(&mut a);
+    net.join(&mut b);
+    let (_a_out, b_in) = net.connect(&mut a, &mut b, "a->b");
+    let (_b_out, a_in) = net.connect(&mut b, &mut a, "b->a");
+    spawn(&mut a, doubler, 5, &[0, a_in as Word, 1]);
+    spawn(&mut b, doubler, 5, &[0, b_in as Word, 1]);
+    for (_, r) in Network::run_pool(vec![a, b], 2) {
+        assert!(matches!(r, Err(RunError::Deadlock(_))), "{r:?}");
+    }
+}
+
+#[test]
+fn pool_wakes_nodes_for_timers_and_mail() {
+    let net = Network::new();
+    let (mut a, _) = node();
+    let (mut b, _) = node();
+    net.join(&mut a);
+    net.join(&mut b);
+    let (a_out, b_in) = net.connect(&mut a, &mut b, "a->b");
+    let out = Box::into_raw(Box::new((-1 as Word, -1 as Word)));
+    spawn(
+        &mut b,
+        crate::timers::timed_alter,
+        7,
+        &[b_in as Word, 5_000_000, 0, out as Word],
+    );
+    spawn(
+        &mut a,
+        crate::timers::late_sender,
+        3,
+        &[a_out as Word, 77, 2000],
+    );
+    for (_, r) in Network::run_pool(vec![a, b], 1) {
+        assert!(r.is_ok(), "{r:?}");
+    }
+    // SAFETY: both nodes have finished; `out` was written by b's process.
+    let (sel, waited) = unsafe { *Box::from_raw(out) };
+    assert_eq!(sel, 0, "the link guard was selected");
+    assert!(waited < 4_000_000, "{waited} µs");
 }
 
 #[test]
@@ -405,7 +471,7 @@ fn alt_over_links_with_jittery_senders_receives_everything() {
         spawn(&mut a, jittery_sender, 5, &[out as Word, k as Word]);
     }
     let wb = spawn(&mut b, link_alter, 7, &[ins.as_ptr() as Word]) as usize;
-    let results = Network::run_all(vec![a, b]);
+    let results = Network::run_pool(vec![a, b], 1);
     for (_, r) in &results {
         assert!(r.is_ok(), "{r:?}");
     }
