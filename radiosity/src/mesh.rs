@@ -13,7 +13,7 @@
 //! 3. patches: longest-edge bisection until every edge is at most `patch_size`;
 //! 4. elements: further bisection to at most `element_size`; each element remembers its patch.
 
-use std::collections::HashMap;
+use std::collections::{BinaryHeap, HashMap};
 
 use glam::Vec3;
 
@@ -83,6 +83,16 @@ pub struct Mesh {
     edges: HashMap<(u32, u32), Vec<u32>>,
     /// What meshing did.
     pub stats: MeshStats,
+}
+
+/// An `f32` ordered for the heap (lengths are finite).
+#[derive(Clone, Copy, PartialEq, PartialOrd)]
+struct OrdF32(f32);
+impl Eq for OrdF32 {}
+impl Ord for OrdF32 {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
+    }
 }
 
 fn edge_key(a: u32, b: u32) -> (u32, u32) {
@@ -185,26 +195,30 @@ impl Mesh {
         self.vertices.len() as u32 - 1
     }
 
-    /// Bisects longest edges until no element edge is longer than `max_edge`.
+    /// Bisects edges longer than `max_edge`, always the longest remaining one first (so it is
+    /// the longest edge of every element around it: longest-edge bisection, which keeps element
+    /// shapes from degrading and the mesh conforming).
     pub fn subdivide(&mut self, max_edge: f32) {
-        loop {
-            let mut changed = false;
-            let mut i = 0;
-            while i < self.elements.len() {
-                let e = self.elements[i];
-                let (len, k) = self.tri(&e).longest_edge();
-                if len > max_edge {
-                    let (a, b) = (e.v[k], e.v[(k + 1) % 3]);
-                    let mid = (self.pos(a) + self.pos(b)) * 0.5;
-                    let m = self.add_edge_vertex(a, b, mid);
-                    self.split_edge(a, b, m);
-                    changed = true;
-                } else {
-                    i += 1;
-                }
+        let mut heap: BinaryHeap<(OrdF32, u32, u32)> = self
+            .edges
+            .keys()
+            .map(|&(a, b)| (OrdF32((self.pos(a) - self.pos(b)).length()), a, b))
+            .filter(|e| e.0.0 > max_edge)
+            .collect();
+        while let Some((_, a, b)) = heap.pop() {
+            if !self.edges.contains_key(&edge_key(a, b)) {
+                continue; // already split
             }
-            if !changed {
-                return;
+            let m = self.add_edge_vertex(a, b, (self.pos(a) + self.pos(b)) * 0.5);
+            for t in self.split_edge(a, b, m) {
+                let e = self.elements[t as usize];
+                let c = e.v.into_iter().find(|&v| v != a && v != b && v != m).unwrap_or(m);
+                for (x, y) in [(a, m), (m, b), (m, c)] {
+                    let len = (self.pos(x) - self.pos(y)).length();
+                    if len > max_edge {
+                        heap.push((OrdF32(len), x.min(y), x.max(y)));
+                    }
+                }
             }
         }
     }

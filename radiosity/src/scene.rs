@@ -445,6 +445,34 @@ pub mod cornell {
     /// OBJ text of `scenes/cornell-empty.obj` (the box without its blocks).
     pub const EMPTY_OBJ: &str = include_str!("../../scenes/cornell-empty.obj");
 
+    /// Returns the Cornell box with each quad (an object of two triangles) split into an
+    /// `n × n` grid of cells, two triangles each (`n = 18` gives the 10,368 triangles of the
+    /// throughput benchmark in the notes §5).
+    pub fn grid_triangles(n: u32) -> Result<Vec<crate::geom::Tri>, super::SceneError> {
+        let scene = load(true)?;
+        let mut out = Vec::new();
+        for o in 0..scene.objects.len() as u32 {
+            let tris: Vec<_> = scene.triangles.iter().filter(|t| t.object == o).map(|t| t.tri).collect();
+            if let [t0, t1] = tris.as_slice() {
+                let q = [t0.v[0], t0.v[1], t0.v[2], t1.v[2]];
+                let at = |i: u32, j: u32| {
+                    let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
+                    q[0] * (1.0 - u) * (1.0 - v) + q[1] * u * (1.0 - v) + q[2] * u * v + q[3] * (1.0 - u) * v
+                };
+                for i in 0..n {
+                    for j in 0..n {
+                        let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                        out.push(crate::geom::Tri::new(a, b, c));
+                        out.push(crate::geom::Tri::new(a, c, d));
+                    }
+                }
+            } else {
+                out.extend(tris);
+            }
+        }
+        Ok(out)
+    }
+
     /// Loads the embedded Cornell box (with the blocks when `blocks` is true).
     pub fn load(blocks: bool) -> Result<super::Scene, super::SceneError> {
         let (name, text) = if blocks { ("cornell-box.obj", OBJ) } else { ("cornell-empty.obj", EMPTY_OBJ) };

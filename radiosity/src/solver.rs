@@ -170,6 +170,10 @@ pub struct Solver<'a> {
     pub history: Vec<ConvergencePoint>,
     /// Counters.
     pub stats: SolveStats,
+    /// Reference mean B per object (from `--reference`), `None` for objects it lacks.
+    pub reference: Option<Vec<Option<DVec3>>>,
+    /// Relative RMS error against the reference, one entry per history row.
+    pub rms_history: Vec<Option<f64>>,
     config: SolverConfig,
     patch_area: Vec<f64>,
     element_area: Vec<f64>,
@@ -198,6 +202,8 @@ impl<'a> Solver<'a> {
             accounts: Accounts { emitted, unshot: emitted, ..Accounts::default() },
             history: Vec::new(),
             stats: SolveStats::default(),
+            reference: None,
+            rms_history: Vec::new(),
             config,
             patch_area,
             element_area,
@@ -230,6 +236,7 @@ impl<'a> Solver<'a> {
                 unshot_fraction: self.unshot_fraction(),
                 vertices: self.mesh.vertices.len(),
             });
+            self.rms_history.push(self.rms_error());
             progress(self.stats.shots, self.unshot_fraction());
         }
         self.stats.seconds += start.elapsed().as_secs_f64();
@@ -412,6 +419,21 @@ impl<'a> Solver<'a> {
             out[e.object as usize].1 += mean * a;
         }
         out.into_iter().map(|(a, s)| (a, if a > 0.0 { s / a } else { DVec3::ZERO })).collect()
+    }
+
+    /// Returns the area-weighted RMS of `|B - B_ref|` over objects with a reference, relative to
+    /// the area-weighted mean `|B_ref|`; `None` without a reference.
+    pub fn rms_error(&self) -> Option<f64> {
+        let reference = self.reference.as_ref()?;
+        let (mut err, mut norm, mut area) = (0.0, 0.0, 0.0);
+        for ((a, b), r) in self.object_means().into_iter().zip(reference) {
+            if let Some(r) = r {
+                err += a * (b - *r).length_squared();
+                norm += a * r.length();
+                area += a;
+            }
+        }
+        (area > 0.0 && norm > 0.0).then(|| (err / area).sqrt() / (norm / area))
     }
 
     /// Returns the configuration.

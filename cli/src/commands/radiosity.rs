@@ -1,15 +1,257 @@
-//! `occ radiosity`.
+//! `occ radiosity`: reads the scene (or takes the embedded Cornell box), runs the reference
+//! solver and writes the outputs of ARCHITECTURE.md §7 into `--out`. All the work is in
+//! `occ-radiosity`; this module only parses flags, reads and writes files and shows progress.
 
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::Context;
+use occ_radiosity::formfactor::FormFactorConfig;
+use occ_radiosity::mesh::{Mesh, MeshConfig};
+use occ_radiosity::output::{image, plot, ply, probe, report};
+use occ_radiosity::scene::{self, Scene};
+use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
+
+/// Which solver to run.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum SolverKind {
+    /// The sequential Rust reference solver.
+    Reference,
+}
 
 /// Flags of `occ radiosity`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Input files.
-    pub files: Vec<std::path::PathBuf>,
+    /// Scene (Wavefront OBJ + MTL); the embedded Cornell box when omitted.
+    pub scene: Option<PathBuf>,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "radiosity-out")]
+    pub out: PathBuf,
+    /// Stopping rule: unshot=FRACTION, shots=N or time=SECONDS.
+    #[arg(long, default_value = "unshot=0.01")]
+    pub until: Until,
+    /// A report.json to measure the RMS error against (matched by object name).
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Probe points, one `x y z nx ny nz` per line; writes probe.csv.
+    #[arg(long)]
+    pub probe: Option<PathBuf>,
+    /// Shadow rays per form factor (time against accuracy of shadows).
+    #[arg(long, default_value_t = 16)]
+    pub rays: u32,
+    /// Solver.
+    #[arg(long, value_enum, default_value = "reference")]
+    pub solver: SolverKind,
+    /// Longest patch (shooter) edge; default: scene diagonal / 8.
+    #[arg(long)]
+    pub patch_size: Option<f32>,
+    /// Longest element edge; default: scene diagonal / 32.
+    #[arg(long)]
+    pub element_size: Option<f32>,
+    /// Turn adaptive subdivision off.
+    #[arg(long)]
+    pub no_adapt: bool,
+    /// Adaptive subdivision: relative form-factor difference along an edge that triggers a test.
+    #[arg(long, default_value_t = 0.3)]
+    pub adapt_difference: f32,
+    /// Adaptive subdivision: relative departure from linearity at the midpoint that splits.
+    #[arg(long, default_value_t = 0.1)]
+    pub adapt_nonlinearity: f32,
+    /// Overshooting factor (1 = none).
+    #[arg(long, default_value_t = 1.0)]
+    pub overshoot: f64,
+    /// Seed of the source sampling.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Image width and height in pixels.
+    #[arg(long, default_value_t = 512)]
+    pub image_size: u32,
+    /// Exposure applied to radiance before the sRGB curve.
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f32,
 }
 
 /// Runs `occ radiosity`.
-pub fn execute(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("`occ radiosity` is not built yet")
+pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
+    check_args(&args)?;
+    let t0 = Instant::now();
+    let (name, scene) = load_scene(args.scene.as_deref())?;
+    let load = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let diag = scene.diagonal();
+    let mesh_config = MeshConfig {
+        patch_size: args.patch_size.unwrap_or(diag / 8.0),
+        element_size: args.element_size.unwrap_or(diag / 32.0),
+    };
+    let mesh = Mesh::from_scene(&scene, mesh_config);
+    let mesh_time = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let mut solver = Solver::new(&scene, mesh, solver_config(&args, diag));
+    let octree_time = t2.elapsed().as_secs_f64();
+    if let Some(path) = &args.reference {
+        let text = read(path)?;
+        let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
+        solver.reference = Some(report::reference_means(
+            &path.display().to_string(),
+            &text,
+            &names,
+        )?);
+    }
+    let probes = match &args.probe {
+        Some(path) => Some(probe::parse_probes(
+            &path.display().to_string(),
+            &read(path)?,
+        )?),
+        None => None,
+    };
+    let t3 = Instant::now();
+    solve(&mut solver);
+    let timings = report::Timings {
+        load,
+        mesh: mesh_time,
+        octree: octree_time,
+        solve: t3.elapsed().as_secs_f64(),
+    };
+    write_outputs(&args, &solver, &name, timings, probes.as_deref())?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn check_args(args: &Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        args.rays >= 1 && args.rays <= 65_536,
+        "--rays must be between 1 and 65536"
+    );
+    anyhow::ensure!(
+        args.overshoot > 0.0 && args.overshoot < 2.0,
+        "--overshoot must lie in (0, 2)"
+    );
+    anyhow::ensure!(
+        args.image_size >= 8 && args.image_size <= 8192,
+        "--image-size must be between 8 and 8192"
+    );
+    for (flag, v) in [
+        ("--patch-size", args.patch_size),
+        ("--element-size", args.element_size),
+    ] {
+        if let Some(v) = v {
+            anyhow::ensure!(v.is_finite() && v > 0.0, "{flag} must be a positive number");
+        }
+    }
+    Ok(())
+}
+
+fn solver_config(args: &Args, diag: f32) -> SolverConfig {
+    let adapt = (!args.no_adapt).then_some(AdaptConfig {
+        difference: args.adapt_difference,
+        nonlinearity: args.adapt_nonlinearity,
+        min_edge: diag / 400.0,
+        min_shot_power: 0.002,
+        passes: 3,
+    });
+    SolverConfig {
+        form_factor: FormFactorConfig {
+            rays: args.rays,
+            offset: diag * 1e-6,
+            ..FormFactorConfig::default()
+        },
+        adapt,
+        overshoot: args.overshoot,
+        until: args.until,
+        seed: args.seed,
+        ..SolverConfig::default()
+    }
+}
+
+fn read(path: &Path) -> anyhow::Result<String> {
+    std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))
+}
+
+/// Loads the scene at `path` (material libraries relative to it), or the embedded Cornell box.
+fn load_scene(path: Option<&Path>) -> anyhow::Result<(String, Scene)> {
+    let Some(path) = path else {
+        return Ok((
+            "cornell-box.obj (embedded)".into(),
+            scene::cornell::load(true)?,
+        ));
+    };
+    let text = read(path)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let library = |name: &str| std::fs::read_to_string(dir.join(name)).map_err(|e| e.to_string());
+    let name = path.display().to_string();
+    let scene = scene::load_obj(&name, &text, &library)?;
+    Ok((name, scene))
+}
+
+/// Runs the solver, with a one-line progress display on a terminal.
+fn solve(solver: &mut Solver) {
+    let terminal = std::io::stderr().is_terminal();
+    let start = Instant::now();
+    let mut last = 0.0;
+    solver.run(|shots, unshot| {
+        let now = start.elapsed().as_secs_f64();
+        if terminal && now - last > 0.1 {
+            last = now;
+            eprint!(
+                "\r  shot {shots:>6}  unshot {:>8.5}%  {now:>6.1} s ",
+                unshot * 100.0
+            );
+            let _ = std::io::stderr().flush();
+        }
+    });
+    if terminal {
+        eprintln!();
+    }
+}
+
+fn write_outputs(
+    args: &Args,
+    solver: &Solver,
+    name: &str,
+    timings: report::Timings,
+    probes: Option<&[probe::Probe]>,
+) -> anyhow::Result<()> {
+    let out = &args.out;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let write = |file: &str, bytes: &[u8]| {
+        std::fs::write(out.join(file), bytes)
+            .with_context(|| format!("cannot write {}", out.join(file).display()))
+    };
+    let rep = report::build(solver, name, timings);
+    write(
+        "report.json",
+        serde_json::to_string_pretty(&rep)?.as_bytes(),
+    )?;
+    write(
+        "convergence.csv",
+        plot::convergence_csv(&solver.history, &solver.rms_history).as_bytes(),
+    )?;
+    let labels = plot::register_system_font();
+    let png = plot::convergence_png(&solver.history, &solver.rms_history, labels)
+        .or_else(|_| plot::convergence_png(&solver.history, &solver.rms_history, false))?;
+    write("convergence.png", &png)?;
+    write(
+        "image.png",
+        &image::image_png(solver, args.image_size, args.image_size, args.exposure)?,
+    )?;
+    write(
+        "solution.ply",
+        ply::solution_ply(solver, args.exposure).as_bytes(),
+    )?;
+    if let Some(probes) = probes {
+        write("probe.csv", probe::probe_csv(solver, probes).as_bytes())?;
+    }
+    let t = &rep.totals;
+    println!(
+        "{}: {} shots, {} sample points, unshot {:.4}%, energy balance error {:.2e}, {:.2} s; outputs in {}",
+        name,
+        solver.stats.shots,
+        solver.mesh.vertices.len(),
+        t.unshot_fraction * 100.0,
+        t.energy_balance_error,
+        rep.timings.solve,
+        out.display()
+    );
+    Ok(())
 }

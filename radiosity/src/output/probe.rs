@@ -1,0 +1,77 @@
+//! Probes: `x y z nx ny nz` per line in, B (RGB) out, interpolated from the solution mesh of the
+//! surface at the point (the element in the plane of the point, facing the same way, that
+//! contains it or comes closest).
+
+use glam::Vec3;
+
+use super::OutputError;
+use crate::solver::Solver;
+
+/// A probe point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Probe {
+    /// Position.
+    pub pos: Vec3,
+    /// Surface normal (need not be unit).
+    pub normal: Vec3,
+}
+
+/// Parses a probe file (blank lines and `#` comments skipped).
+pub fn parse_probes(file: &str, text: &str) -> Result<Vec<Probe>, OutputError> {
+    let mut out = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let err = |message: String| OutputError::Probe { file: file.into(), line: i + 1, message };
+        let nums: Vec<f32> = line
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|w| !w.is_empty())
+            .map(|w| w.parse::<f32>().ok().filter(|x| x.is_finite()).ok_or_else(|| err(format!("`{w}` is not a finite number"))))
+            .collect::<Result<_, _>>()?;
+        if nums.len() != 6 {
+            return Err(err(format!("expected 6 numbers `x y z nx ny nz`, found {}", nums.len())));
+        }
+        let normal = Vec3::new(nums[3], nums[4], nums[5]);
+        if normal.length() == 0.0 {
+            return Err(err("the normal is zero".into()));
+        }
+        out.push(Probe { pos: Vec3::new(nums[0], nums[1], nums[2]), normal: normal.normalize() });
+    }
+    Ok(out)
+}
+
+/// Returns B (RGB) at the probe, or `None` when no surface faces that way near the point.
+pub fn evaluate(solver: &Solver, probe: &Probe) -> Option<Vec3> {
+    let mesh = &solver.mesh;
+    let mut best: Option<(f32, usize, [f32; 3])> = None;
+    for (i, e) in mesh.elements.iter().enumerate() {
+        let t = mesh.tri(e);
+        if t.normal().dot(probe.normal) < 0.9 {
+            continue;
+        }
+        let d = (t.closest_point(probe.pos) - probe.pos).length();
+        if best.is_none_or(|b| d < b.0) {
+            let bary = t.barycentric(t.closest_point(probe.pos));
+            best = Some((d, i, bary));
+        }
+    }
+    let (d, i, bary) = best?;
+    let scale = solver.scene.diagonal();
+    if d > 1e-3 * scale {
+        return None;
+    }
+    let b = solver.element_corner_radiosity(i, Vec3::ZERO);
+    Some(b[0] * bary[0] + b[1] * bary[1] + b[2] * bary[2])
+}
+
+/// Returns `probe.csv`: `x,y,z,nx,ny,nz,b_r,b_g,b_b` (empty B when no surface matched).
+pub fn probe_csv(solver: &Solver, probes: &[Probe]) -> String {
+    let mut s = String::from("x,y,z,nx,ny,nz,b_r,b_g,b_b\n");
+    for p in probes {
+        let b = evaluate(solver, p).map_or(",,".to_string(), |b| format!("{},{},{}", b.x, b.y, b.z));
+        s += &format!("{},{},{},{},{},{},{b}\n", p.pos.x, p.pos.y, p.pos.z, p.normal.x, p.normal.y, p.normal.z);
+    }
+    s
+}

@@ -1,0 +1,40 @@
+//! Scenes built in code for the tests.
+#![allow(dead_code, reason = "each test file uses part of the helpers")]
+
+use glam::Vec3;
+use occ_radiosity::geom::Tri;
+use occ_radiosity::scene::{Object, Scene, SceneTri};
+
+/// A closed axis-aligned box `lo..hi` with faces facing inward, one object per face, named
+/// `-x +x -y +y -z +z`; `emission(face)` gives each face's Ke.
+pub fn closed_box(lo: Vec3, hi: Vec3, reflectance: f32, emission: impl Fn(usize) -> f32) -> Scene {
+    let mut scene = Scene::default();
+    let names = ["-x", "+x", "-y", "+y", "-z", "+z"];
+    for (f, name) in names.iter().enumerate() {
+        let axis = f / 2;
+        let at_hi = f % 2 == 1;
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let corner = |a: bool, b: bool| {
+            let mut p = lo;
+            p[axis] = if at_hi { hi[axis] } else { lo[axis] };
+            p[u] = if a { hi[u] } else { lo[u] };
+            p[v] = if b { hi[v] } else { lo[v] };
+            p
+        };
+        let (p0, p1, p2, p3) = (corner(false, false), corner(true, false), corner(true, true), corner(false, true));
+        let mut t = [Tri::new(p0, p1, p2), Tri::new(p0, p2, p3)];
+        let inward = if at_hi { -1.0 } else { 1.0 };
+        if t[0].normal()[axis] * inward < 0.0 {
+            t = [Tri::new(p0, p2, p1), Tri::new(p0, p3, p2)];
+        }
+        scene.objects.push(Object {
+            name: name.to_string(),
+            reflectance: Vec3::splat(reflectance),
+            emission: Vec3::splat(emission(f)),
+        });
+        for tri in t {
+            scene.triangles.push(SceneTri { tri, object: f as u32 });
+        }
+    }
+    scene
+}
