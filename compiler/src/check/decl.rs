@@ -513,10 +513,10 @@ impl Checker {
 fn summarise(mut usage: Vec<Access>, first: SymbolId, params: &[SymbolId]) -> Vec<Access> {
     usage.retain(|a| a.symbol < first || params.contains(&a.symbol));
     for a in &mut usage {
-        if let Part::Range { start, .. } = a.part
-            && start.var.is_some()
-        {
-            a.part = Part::Whole;
+        match a.part {
+            Part::Range { start, .. } if start.var.is_some() => a.part = Part::Whole,
+            Part::Mapped { .. } => a.part = Part::Whole,
+            _ => {}
         }
     }
     crate::usage::dedup(&mut usage);

@@ -268,17 +268,13 @@ impl Checker {
 
     /// Follows reference abbreviations from an access to the storage it touches; returns that
     /// access and the abbreviations passed through.
-    fn resolve_alias(&self, mut access: Access) -> (Access, Vec<SymbolId>) {
+    fn resolve_alias(&mut self, mut access: Access) -> (Access, Vec<SymbolId>) {
         let mut hops: Vec<SymbolId> = Vec::new();
         for _ in 0..32 {
             match self.sym(access.symbol).alias_of {
                 Some(target) => {
                     hops.push(access.symbol);
-                    let part = if target.part == Part::Whole {
-                        access.part
-                    } else {
-                        target.part
-                    };
+                    let part = self.nest(target.part, access.part);
                     access = Access {
                         symbol: target.symbol,
                         part,

@@ -9,7 +9,18 @@ use crate::checked::SymbolKind;
 use crate::consteval::Value;
 use crate::diagnostic::DiagnosticKind;
 use crate::types::Type;
-use crate::usage::{Access, Lin, Mode, Part};
+use crate::types::{bytes_in, offset_of};
+use crate::usage::{Access, Lin, Mode, Part, TO_END};
+
+/// The part of a symbol that is all of it.
+pub(super) const ENTIRE: Part = Part::Range {
+    start: Lin {
+        var: None,
+        a: 0,
+        b: 0,
+    },
+    len: TO_END,
+};
 
 /// An element after checking.
 #[derive(Debug, Clone)]
@@ -87,7 +98,7 @@ impl Checker {
                 let target = Some(Access {
                     symbol: id,
                     mode: Mode::Read,
-                    part: Part::Whole,
+                    part: ENTIRE,
                     span: name.span,
                 });
                 Placed {
@@ -107,11 +118,11 @@ impl Checker {
                 let access = Access {
                     symbol: id,
                     mode: mode.unwrap_or(Mode::Read),
-                    part: Part::Whole,
+                    part: ENTIRE,
                     span: name.span,
                 };
                 if let Some(m) = mode {
-                    self.record(id, m, Part::Whole, name.span);
+                    self.record(id, m, ENTIRE, name.span);
                 }
                 Placed {
                     ty,
@@ -161,9 +172,13 @@ impl Checker {
                 Some(Value::Record(vs)) => vs.get(i).cloned(),
                 _ => None,
             };
-            let part = Part::Range {
-                start: Lin::constant(i as i64),
-                len: 1,
+            let offset = offset_of(&self.out.types, &b.ty, &field.text).ok();
+            let part = match offset {
+                Some(o) => Part::Range {
+                    start: Lin::constant(i64::from(o)),
+                    len: self.bytes(&ty),
+                },
+                None => Part::Whole,
             };
             return self.finish_part(b, ty, part, value, mode, span);
         }
@@ -196,9 +211,10 @@ impl Checker {
             }
             _ => None,
         };
-        let part = match self.linear(index) {
-            Some(start) => Part::Range { start, len: 1 },
-            None => self.mapped(index).unwrap_or(Part::Whole),
+        let stride = self.bytes(&elem);
+        let part = match self.linear(index).and_then(|l| l.scale(stride)) {
+            Some(start) => Part::Range { start, len: stride },
+            None => self.mapped(index, stride).unwrap_or(Part::Whole),
         };
         self.finish_part(b, elem, part, value, mode, span)
     }
@@ -220,7 +236,7 @@ impl Checker {
         span: ast::Span,
     ) -> Placed {
         let target = b.target.map(|t| Access {
-            part: if t.part == Part::Whole { part } else { t.part },
+            part: self.nest(t.part, part),
             span,
             ..t
         });
@@ -278,14 +294,17 @@ impl Checker {
                 span,
             );
         }
+        let stride = self.bytes(&elem);
         let ty = Type::array(n.and_then(|c| u32::try_from(c).ok()), elem);
         let start_lin = match from {
             Some(f) => self.linear(f),
             None => Some(Lin::constant(0)),
         };
-        let part = match (start_lin, n) {
-            (Some(start), Some(len)) => Part::Range { start, len },
-            _ => Part::Whole,
+        let start_lin = start_lin.and_then(|s| s.scale(stride));
+        let bytes = n.and_then(|n| n.checked_mul(stride)).unwrap_or(TO_END);
+        let part = match start_lin {
+            Some(start) => Part::Range { start, len: bytes },
+            None => Part::Whole,
         };
         let value = match (&b.value, start, n) {
             (Some(Value::Array(vs)), Some(s), Some(c)) => {
@@ -324,18 +343,60 @@ impl Checker {
 }
 
 impl Checker {
+    /// The size of a value of type `ty` in bytes, or [`TO_END`] when it is not known.
+    fn bytes(&self, ty: &Type) -> i64 {
+        bytes_in(&self.out.types, ty).map_or(TO_END, i64::from)
+    }
+
+    /// The part `inner` (bytes from the start of `base`) of the part `base` of a symbol.
+    pub(super) fn nest(&mut self, base: Part, inner: Part) -> Part {
+        match (base, inner) {
+            (Part::Range { start: sb, len: bl }, Part::Range { start: si, len: il }) => {
+                match sb.add(si) {
+                    Some(start) => Part::Range {
+                        start,
+                        len: il.min(bl),
+                    },
+                    None => Part::Whole,
+                }
+            }
+            (Part::Range { start: sb, .. }, Part::Mapped { var, table, len })
+                if sb.var.is_none() =>
+            {
+                let Some(t) = self.tables.get(table as usize) else {
+                    return Part::Whole;
+                };
+                let shifted: Vec<(i64, i64)> = t
+                    .iter()
+                    .map(|(v, s)| (*v, s.saturating_add(sb.b)))
+                    .collect();
+                self.tables.push(shifted);
+                let table = u32::try_from(self.tables.len() - 1).unwrap_or(u32::MAX);
+                Part::Mapped { var, table, len }
+            }
+            _ => Part::Whole,
+        }
+    }
+
     /// Evaluates a non-linear subscript for every value of the one replicator it depends on,
     /// when that replicator's values are known (occ21 unrolls such replicators).
-    fn mapped(&mut self, e: &Expr) -> Option<Part> {
+    fn mapped(&mut self, e: &Expr, stride: i64) -> Option<Part> {
         let var = self.repl_var(e)?;
         let values = self.repl_values.get(&var)?;
         let table: Option<Vec<(i64, i64)>> = values
             .iter()
-            .map(|&v| self.eval_with(e, var, v).map(|s| (v, s)))
+            .map(|&v| {
+                self.eval_with(e, var, v)
+                    .and_then(|s| Some((v, s.checked_mul(stride)?)))
+            })
             .collect();
         self.tables.push(table?);
         let table = u32::try_from(self.tables.len() - 1).ok()?;
-        Some(Part::Mapped { var, table, len: 1 })
+        Some(Part::Mapped {
+            var,
+            table,
+            len: stride,
+        })
     }
 
     /// Finds a replicator index used in `e`.

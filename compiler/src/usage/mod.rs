@@ -49,12 +49,39 @@ impl Lin {
     pub fn constant(b: i64) -> Lin {
         Lin { var: None, a: 0, b }
     }
+
+    /// Adds two linear functions of at most one (the same) replicator index.
+    pub fn add(self, o: Lin) -> Option<Lin> {
+        let var = match (self.var, o.var) {
+            (Some(x), Some(y)) if x != y => return None,
+            (x, y) => x.or(y),
+        };
+        Some(Lin {
+            var,
+            a: self.a.checked_add(o.a)?,
+            b: self.b.checked_add(o.b)?,
+        })
+    }
+
+    /// Multiplies by a constant.
+    pub fn scale(self, k: i64) -> Option<Lin> {
+        Some(Lin {
+            var: self.var,
+            a: self.a.checked_mul(k)?,
+            b: self.b.checked_mul(k)?,
+        })
+    }
 }
 
-/// Which part of a symbol an access touches (first dimension or record field only).
+/// The length of a part that runs to the end of its symbol (an open array, or an array slice
+/// without a count): large, but far from overflowing when added to.
+pub const TO_END: i64 = i64::MAX / 4;
+
+/// Which part of a symbol an access touches, in bytes from the symbol's start, so that
+/// subscripts at every depth and record fields compare alike.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Part {
-    /// All of it (or an element whose subscript is not known).
+    /// Somewhere in the symbol: a subscript that is not known at compile time.
     Whole,
     /// Elements (or record fields) `start .. start + len`.
     Range {
@@ -208,7 +235,7 @@ pub fn may_overlap_across(
         (Part::Range { start: s, len: n }, Part::Range { start: t, len: m })
             if s.var == Some(index) && t.var == Some(index) =>
         {
-            !(s.a == t.a && s.a != 0 && s.b == t.b && n == 1 && m == 1)
+            !(s.a == t.a && s.b == t.b && n == m && s.a.unsigned_abs() >= n.unsigned_abs())
         }
         _ => true,
     }
