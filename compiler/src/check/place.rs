@@ -352,7 +352,7 @@ impl Checker {
     pub(super) fn nest(&mut self, base: Part, inner: Part) -> Part {
         match (base, inner) {
             (Part::Range { start: sb, len: bl }, Part::Range { start: si, len: il }) => {
-                match sb.add(si) {
+                match sb.plus(si) {
                     Some(start) => Part::Range {
                         start,
                         len: il.min(bl),

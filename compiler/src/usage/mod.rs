@@ -51,7 +51,7 @@ impl Lin {
     }
 
     /// Adds two linear functions of at most one (the same) replicator index.
-    pub fn add(self, o: Lin) -> Option<Lin> {
+    pub fn plus(self, o: Lin) -> Option<Lin> {
         let var = match (self.var, o.var) {
             (Some(x), Some(y)) if x != y => return None,
             (x, y) => x.or(y),
