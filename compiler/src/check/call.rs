@@ -276,9 +276,13 @@ impl Checker {
                 .filter(|a| first_param.is_none_or(|p| a.symbol < p))
                 .copied()
                 .collect();
+            // The body was checked against the abbreviations in scope where it was declared;
+            // only those declared since can be aliased by this call.
+            self.alias_floor = self.out.procs[pid].symbol;
             for a in free {
                 self.record(a.symbol, a.mode, a.part, span);
             }
+            self.alias_floor = None;
         }
     }
 

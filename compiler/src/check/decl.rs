@@ -303,7 +303,6 @@ impl Checker {
         let id = self.declare(name, sym_kind, to, assignable && !val);
         if let Some(t) = target {
             let whole = Access {
-                part: Part::Whole,
                 mode: Mode::Read,
                 ..t
             };
@@ -514,7 +513,7 @@ fn summarise(mut usage: Vec<Access>, first: SymbolId, params: &[SymbolId]) -> Ve
     usage.retain(|a| a.symbol < first || params.contains(&a.symbol));
     for a in &mut usage {
         match a.part {
-            Part::Range { start, .. } if start.var.is_some() => a.part = Part::Whole,
+            Part::Range { start, .. } if start.as_const().is_none() => a.part = Part::Whole,
             Part::Mapped { .. } => a.part = Part::Whole,
             _ => {}
         }

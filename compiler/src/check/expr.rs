@@ -478,7 +478,7 @@ impl Checker {
         let untyped = !items.is_empty() && items.iter().all(is_untyped);
         let mut values = Some(Vec::with_capacity(items.len()));
         for item in items {
-            let t = self.expr(item, elem.as_ref());
+            let t = self.table_item(item, elem.as_ref());
             match &elem {
                 Some(e) => {
                     self.expect_type(e, &t.ty, item.span);
@@ -501,6 +501,22 @@ impl Checker {
             _ => ty,
         };
         Typed::constant(ty, values.map(Value::Array))
+    }
+
+    /// Checks one item of a table: a value, or a channel or timer (`[c1, c2]` abbreviated as
+    /// a channel array).
+    fn table_item(&mut self, item: &Expr, want: Option<&Type>) -> Typed {
+        if super::place::is_element(item) {
+            let p = self.place(item, None);
+            if !p.ty.is_data() {
+                return Typed {
+                    ty: p.ty,
+                    value: None,
+                    target: p.target,
+                };
+            }
+        }
+        self.expr(item, want)
     }
 
     /// Checks `[a, b](T)`: a RECORD literal (items against fields) or an array literal of type `T`.

@@ -62,6 +62,8 @@ pub(crate) struct Checker {
     /// Inside `SIZE` / `BYTESIN` operands, which name storage without using it.
     quiet: u32,
     options: Options,
+    /// Abbreviations declared before this symbol are ignored by the alias check (see calls).
+    alias_floor: Option<SymbolId>,
     /// Tables of non-linear subscripts evaluated per replicator value.
     tables: crate::usage::Tables,
     /// Index values of replicators with constant base, count and step (and a small count).
@@ -133,6 +135,7 @@ impl Checker {
             abbreviated: Vec::new(),
             quiet: 0,
             options: Options::default(),
+            alias_floor: None,
             tables: Vec::new(),
             repl_values: std::collections::HashMap::new(),
         };
@@ -299,6 +302,7 @@ impl Checker {
         }
         let clash = self.abbreviated.iter().rev().find(|a| {
             a.target.symbol == access.symbol
+                && self.alias_floor.is_none_or(|f| a.alias > f)
                 && !hops.contains(&a.alias)
                 && (!a.val || access.mode == Mode::Write)
                 && may_overlap(&self.tables, a.target.part, access.part)

@@ -15,8 +15,7 @@ use crate::usage::{Access, Lin, Mode, Part, TO_END};
 /// The part of a symbol that is all of it.
 pub(super) const ENTIRE: Part = Part::Range {
     start: Lin {
-        var: None,
-        a: 0,
+        terms: [None, None],
         b: 0,
     },
     len: TO_END,
@@ -327,11 +326,17 @@ impl Checker {
         match &e.kind {
             ExprKind::Name(n) => {
                 let id = *self.out.names.get(&n.span)?;
-                matches!(self.sym(id).kind, SymbolKind::Replicator).then_some(Lin {
-                    var: Some(id),
-                    a: 1,
-                    b: 0,
-                })
+                // Replicator indices, and integer names whose value cannot change where the
+                // comparison is made (PAR branches may not write a name another one uses).
+                let sym = self.sym(id);
+                let named = match &sym.kind {
+                    SymbolKind::Replicator => true,
+                    SymbolKind::Variable | SymbolKind::Param { .. } | SymbolKind::Val { .. } => {
+                        self.out.types.prim(&sym.ty).is_some_and(|p| p.is_integer())
+                    }
+                    _ => false,
+                };
+                named.then_some(Lin::var(id))
             }
             ExprKind::Binary { op, lhs, rhs } => {
                 let (l, r) = (self.linear(lhs)?, self.linear(rhs)?);
@@ -361,7 +366,7 @@ impl Checker {
                 }
             }
             (Part::Range { start: sb, .. }, Part::Mapped { var, table, len })
-                if sb.var.is_none() =>
+                if sb.as_const().is_some() =>
             {
                 let Some(t) = self.tables.get(table as usize) else {
                     return Part::Whole;
@@ -438,31 +443,14 @@ impl Checker {
 }
 
 fn combine(op: BinOp, l: Lin, r: Lin) -> Option<Lin> {
-    let var = match (l.var, r.var) {
-        (Some(a), Some(b)) if a != b => return None,
-        (a, b) => a.or(b),
-    };
     match op {
-        BinOp::Add | BinOp::Plus => Some(Lin {
-            var,
-            a: l.a.checked_add(r.a)?,
-            b: l.b.checked_add(r.b)?,
-        }),
-        BinOp::Sub | BinOp::Minus => Some(Lin {
-            var,
-            a: l.a.checked_sub(r.a)?,
-            b: l.b.checked_sub(r.b)?,
-        }),
-        BinOp::Mul | BinOp::Times if r.var.is_none() => Some(Lin {
-            var,
-            a: l.a.checked_mul(r.b)?,
-            b: l.b.checked_mul(r.b)?,
-        }),
-        BinOp::Mul | BinOp::Times if l.var.is_none() => Some(Lin {
-            var,
-            a: r.a.checked_mul(l.b)?,
-            b: r.b.checked_mul(l.b)?,
-        }),
+        BinOp::Add | BinOp::Plus => l.plus(r),
+        BinOp::Sub | BinOp::Minus => l.plus(r.scale(-1)?),
+        BinOp::Mul | BinOp::Times => match (l.as_const(), r.as_const()) {
+            (_, Some(k)) => l.scale(k),
+            (Some(k), _) => r.scale(k),
+            _ => None,
+        },
         _ => None,
     }
 }

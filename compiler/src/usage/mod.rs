@@ -13,8 +13,11 @@
 //! compared with the PAR's own index taking different values: with a constant count every pair of
 //! index values is tried; otherwise `a*i + b` and `a*j + b` (same `a`, `b`, `a != 0`) are disjoint.
 
+mod lin;
 #[cfg(test)]
 mod test;
+
+pub use lin::Lin;
 
 use occ_grammar::ast::Span;
 
@@ -31,46 +34,6 @@ pub enum Mode {
     Input,
     /// A channel is output to.
     Output,
-}
-
-/// A linear function `a*var + b` of a replicator index, or a constant when `var` is `None`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Lin {
-    /// The replicator index, if any.
-    pub var: Option<SymbolId>,
-    /// The coefficient of `var`.
-    pub a: i64,
-    /// The constant term.
-    pub b: i64,
-}
-
-impl Lin {
-    /// A constant.
-    pub fn constant(b: i64) -> Lin {
-        Lin { var: None, a: 0, b }
-    }
-
-    /// Adds two linear functions of at most one (the same) replicator index.
-    pub fn plus(self, o: Lin) -> Option<Lin> {
-        let var = match (self.var, o.var) {
-            (Some(x), Some(y)) if x != y => return None,
-            (x, y) => x.or(y),
-        };
-        Some(Lin {
-            var,
-            a: self.a.checked_add(o.a)?,
-            b: self.b.checked_add(o.b)?,
-        })
-    }
-
-    /// Multiplies by a constant.
-    pub fn scale(self, k: i64) -> Option<Lin> {
-        Some(Lin {
-            var: self.var,
-            a: self.a.checked_mul(k)?,
-            b: self.b.checked_mul(k)?,
-        })
-    }
 }
 
 /// The length of a part that runs to the end of its symbol (an open array, or an array slice
@@ -105,21 +68,26 @@ pub enum Part {
 /// The tables of [`Part::Mapped`] subscripts: `(index value, first element)` pairs.
 pub type Tables = Vec<Vec<(i64, i64)>>;
 
-/// Returns the elements `(start, len)` a part touches when `index` has value `v`, if that is
-/// known without other replicators.
-fn concrete(tables: &Tables, p: Part, index: SymbolId, v: i64) -> Option<(i64, i64)> {
+/// Sets the replicator `index` to `v` in a part.
+fn subst(tables: &Tables, p: Part, index: SymbolId, v: i64) -> Part {
     match p {
-        Part::Whole => None,
-        Part::Range { start, len } => match start.var {
-            None => Some((start.b, len)),
-            Some(x) if x == index => Some((start.a.saturating_mul(v).saturating_add(start.b), len)),
-            Some(_) => None,
+        Part::Range { start, len } => match start.subst(index, v) {
+            Some(start) => Part::Range { start, len },
+            None => Part::Whole,
         },
         Part::Mapped { var, table, len } if var == index => {
-            let t = tables.get(table as usize)?;
-            t.iter().find(|(x, _)| *x == v).map(|(_, s)| (*s, len))
+            let entry = tables
+                .get(table as usize)
+                .and_then(|t| t.iter().find(|(x, _)| *x == v));
+            match entry {
+                Some((_, s)) => Part::Range {
+                    start: Lin::constant(*s),
+                    len,
+                },
+                None => Part::Whole,
+            }
         }
-        Part::Mapped { .. } => None,
+        other => other,
     }
 }
 
@@ -127,32 +95,46 @@ fn ranges_overlap((s, n): (i64, i64), (t, m): (i64, i64)) -> bool {
     s < t.saturating_add(m) && t < s.saturating_add(n)
 }
 
+/// Reports whether a part depends on the replicator `index`.
+fn mentions(p: Part, index: SymbolId) -> bool {
+    match p {
+        Part::Range { start, .. } => start.mentions(index),
+        Part::Mapped { var, .. } => var == index,
+        Part::Whole => false,
+    }
+}
+
 /// Replaces the dependence of a part on the replicator `index` by the hull of the elements it
 /// touches over `values` (or the whole symbol when the values are unknown): used when the
 /// replicator goes out of scope.
 pub fn hull(tables: &Tables, p: Part, index: SymbolId, values: Option<&[i64]>) -> Part {
-    let depends = match p {
-        Part::Range { start, .. } => start.var == Some(index),
-        Part::Mapped { var, .. } => var == index,
-        Part::Whole => false,
-    };
-    if !depends {
+    if !mentions(p, index) {
         return p;
     }
     let Some(values) = values.filter(|v| !v.is_empty()) else {
         return Part::Whole;
     };
+    let (rest, len) = match p {
+        Part::Range { start, len } => (start.without(index), len),
+        Part::Mapped { len, .. } => (Lin::constant(0), len),
+        Part::Whole => return Part::Whole,
+    };
     let mut lo = i64::MAX;
     let mut hi = i64::MIN;
     for &v in values {
-        let Some((s, n)) = concrete(tables, p, index, v) else {
-            return Part::Whole;
+        let offset = match subst(tables, p, index, v) {
+            Part::Range { start, .. } => start.b.saturating_sub(rest.b),
+            _ => return Part::Whole,
         };
-        lo = lo.min(s);
-        hi = hi.max(s.saturating_add(n));
+        lo = lo.min(offset);
+        hi = hi.max(offset.saturating_add(len));
     }
+    let start = Lin {
+        b: rest.b.saturating_add(lo),
+        ..rest
+    };
     Part::Range {
-        start: Lin::constant(lo),
+        start,
         len: hi.saturating_sub(lo),
     }
 }
@@ -170,40 +152,25 @@ pub struct Access {
     pub span: Span,
 }
 
-/// Reports whether two parts may overlap, with both evaluated in the same instance.
+/// Reports whether two parts may overlap, with both evaluated in the same instance (so a name
+/// that appears in both has the same value in both).
 pub fn may_overlap(tables: &Tables, p: Part, q: Part) -> bool {
     match (p, q) {
-        // Same function of the same index: compare the constant offsets.
-        (Part::Range { start: s, len: n }, Part::Range { start: t, len: m })
-            if s.var == t.var && s.a == t.a =>
-        {
+        (Part::Range { start: s, len: n }, Part::Range { start: t, len: m }) if s.same_terms(t) => {
             ranges_overlap((s.b, n), (t.b, m))
         }
-        (Part::Mapped { var, .. }, _) | (_, Part::Mapped { var, .. }) => {
-            let Some(t) = mapped_values(tables, p).or_else(|| mapped_values(tables, q)) else {
+        (Part::Mapped { var, table, .. }, _) | (_, Part::Mapped { var, table, .. }) => {
+            let Some(t) = tables.get(table as usize) else {
                 return true;
             };
             t.iter().any(
-                |&v| match (concrete(tables, p, var, v), concrete(tables, q, var, v)) {
-                    (Some(a), Some(b)) => ranges_overlap(a, b),
-                    _ => true,
+                |&(v, _)| match (subst(tables, p, var, v), subst(tables, q, var, v)) {
+                    (Part::Mapped { .. }, _) | (_, Part::Mapped { .. }) => true,
+                    (a, b) => may_overlap(tables, a, b),
                 },
             )
         }
         _ => true,
-    }
-}
-
-fn mapped_values(tables: &Tables, p: Part) -> Option<Vec<i64>> {
-    match p {
-        Part::Mapped { table, .. } => Some(
-            tables
-                .get(table as usize)?
-                .iter()
-                .map(|(v, _)| *v)
-                .collect(),
-        ),
-        _ => None,
     }
 }
 
@@ -216,38 +183,32 @@ pub fn may_overlap_across(
     index: SymbolId,
     values: Option<&[i64]>,
 ) -> bool {
+    if values.is_some_and(|v| v.len() < 2) {
+        return false; // one instance: nothing to share with
+    }
+    if !mentions(p, index) && !mentions(q, index) {
+        return may_overlap(tables, p, q);
+    }
     if let Some(vals) = values {
         return vals.iter().enumerate().any(|(k, &i)| {
             vals.iter().enumerate().any(|(l, &j)| {
                 k != l
-                    && match (concrete(tables, p, index, i), concrete(tables, q, index, j)) {
-                        (Some(a), Some(b)) => ranges_overlap(a, b),
-                        _ => {
-                            depends_on_other(p, index)
-                                || depends_on_other(q, index)
-                                || may_overlap(tables, p, q)
-                        }
-                    }
+                    && may_overlap(
+                        tables,
+                        subst(tables, p, index, i),
+                        subst(tables, q, index, j),
+                    )
             })
         });
     }
     match (p, q) {
-        (Part::Range { start: s, len: n }, Part::Range { start: t, len: m })
-            if s.var == Some(index) && t.var == Some(index) =>
-        {
-            !(s.a == t.a && s.b == t.b && n == m && s.a.unsigned_abs() >= n.unsigned_abs())
+        (Part::Range { start: s, len: n }, Part::Range { start: t, len: m }) => {
+            let c = s.coef(index);
+            let disjoint =
+                s.same_terms(t) && s.b == t.b && n == m && c.unsigned_abs() >= n.unsigned_abs();
+            !disjoint
         }
         _ => true,
-    }
-}
-
-/// Reports whether a part depends on a replicator other than `index` (then it cannot be
-/// compared across instances and counts as overlapping).
-fn depends_on_other(p: Part, index: SymbolId) -> bool {
-    match p {
-        Part::Range { start, .. } => start.var.is_some_and(|v| v != index),
-        Part::Mapped { var, .. } => var != index,
-        Part::Whole => true,
     }
 }
 

@@ -23,11 +23,10 @@ fn elem(b: i64) -> Part {
 
 fn lin(var: usize, a: i64, b: i64) -> Part {
     Part::Range {
-        start: Lin {
-            var: Some(sym(var)),
-            a,
-            b,
-        },
+        start: Lin::var(sym(var))
+            .scale(a)
+            .and_then(|l| l.plus(Lin::constant(b)))
+            .unwrap(),
         len: 1,
     }
 }
