@@ -173,10 +173,11 @@ fn input_text(lines: &[String]) -> String {
 /// Rewrites the file's `-- stdout:` lines; a write failure is reported on stderr, not fatal.
 fn bless_file(path: &Path, source: &str, stdout: &str) {
     let text = bless::rewrite(source, &judge::output_lines(stdout));
-    if text != source {
-        if let Err(error) = std::fs::write(path, text) {
-            eprintln!("{}: cannot bless: {error}", path.display());
-        }
+    if text == source {
+        return;
+    }
+    if let Err(error) = std::fs::write(path, text) {
+        eprintln!("{}: cannot bless: {error}", path.display());
     }
 }
 
