@@ -73,7 +73,11 @@ fn report(out: &mut impl Write, result: &FileResult, verbose: bool) -> std::io::
         .map_or_else(|| "?".to_string(), |k| k.to_string());
     let path = result.path.display();
     match &result.verdict {
-        Verdict::Fail(why) => writeln!(out, "FAIL {path} [{kind}]: {why}"),
+        Verdict::Fail(why) => {
+            // One line per failure: multi-line details (a program's stderr) are joined.
+            let why = why.trim_end().replace('\n', " | ");
+            writeln!(out, "FAIL {path} [{kind}]: {why}")
+        }
         Verdict::Skip(reason) if verbose => {
             writeln!(out, "skip {path} [{kind}]: skipped ({reason})")
         }
