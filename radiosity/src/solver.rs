@@ -54,9 +54,11 @@ fn finite_non_negative(v: f64) -> Result<f64, String> {
 /// Adaptive subdivision settings.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct AdaptConfig {
-    /// Refine an edge when its ends' form factors differ by more than this fraction of the larger.
+    /// Test an edge when this shot's contributions at its ends differ by more than this fraction
+    /// of the local irradiance (gathered so far plus this shot): a steep gradient.
     pub difference: f32,
-    /// ... and the midpoint differs from the linear interpolation by more than this fraction.
+    /// ... and split it when the contribution at the midpoint departs from the linear
+    /// interpolation by more than this fraction of the local irradiance (linearity check).
     pub nonlinearity: f32,
     /// Never split edges shorter than this (scene units).
     pub min_edge: f32,
@@ -64,6 +66,8 @@ pub struct AdaptConfig {
     pub min_shot_power: f64,
     /// Refinement passes per shot (each can halve an edge once more).
     pub passes: u32,
+    /// No refinement once the mesh has this many sample points.
+    pub max_vertices: usize,
 }
 
 /// Solver settings.
@@ -303,37 +307,25 @@ impl<'a> Solver<'a> {
         if shot.abs().element_sum() < adapt.min_shot_power * emitted {
             return factors;
         }
+        let budget = adapt.max_vertices.max(self.mesh.vertices.len());
+        let db = (shot / self.patch_area[src]).as_vec3().element_sum() as f32;
         for _ in 0..adapt.passes {
-            let candidates: Vec<(u32, u32)> = self
-                .mesh
-                .edge_list()
-                .into_iter()
-                .filter(|&(a, b)| {
-                    let (fa, fb) = (factors[a as usize], factors[b as usize]);
-                    let len = (self.mesh.vertices[a as usize].pos - self.mesh.vertices[b as usize].pos).length();
-                    len > 2.0 * adapt.min_edge && (fa - fb).abs() > adapt.difference * fa.max(fb)
-                })
-                .collect();
-            if candidates.is_empty() {
+            let mut candidates = self.refinement_candidates(&factors, db, &adapt);
+            let room = budget.saturating_sub(self.mesh.vertices.len());
+            if candidates.is_empty() || room == 0 {
                 break;
             }
+            candidates.truncate(room);
             let mids: Vec<SamplePoint> = candidates.iter().map(|&(a, b)| self.midpoint(a, b)).collect();
             let mid_f = self.shoot_points(src, &mids);
             let mut split = 0;
             for (&(a, b), (m, fm)) in candidates.iter().zip(mids.iter().zip(mid_f)) {
-                let linear = 0.5 * (factors[a as usize] + factors[b as usize]);
-                let scale = factors[a as usize].max(factors[b as usize]).max(1e-12);
-                if (fm - linear).abs() <= adapt.nonlinearity * scale {
+                let (fa, fb) = (factors[a as usize], factors[b as usize]);
+                let local = self.local_irradiance(a, b) + db * fa.max(fb);
+                if (db * (fm - 0.5 * (fa + fb))).abs() <= adapt.nonlinearity * local {
                     continue;
                 }
-                let v = self.mesh.add_edge_vertex(a, b, Vec3::from(m.pos));
-                self.mesh.vertices[v as usize].eval = Vec3::from(m.eval);
-                let h = 0.5 * (self.irradiance[a as usize] + self.irradiance[b as usize]);
-                self.irradiance.push(h);
-                factors.push(fm);
-                let before = self.mesh.elements.len();
-                let shrunk = self.mesh.split_edge(a, b, v);
-                self.fix_split_areas(before, &shrunk);
+                self.split_at(a, b, m, fm, &mut factors);
                 split += 1;
             }
             self.stats.adaptive_splits += split;
@@ -342,6 +334,44 @@ impl<'a> Solver<'a> {
             }
         }
         factors
+    }
+
+    /// Edges longer than twice the minimum whose two ends receive from this shot amounts that
+    /// differ by more than `difference` times the local irradiance (including this shot),
+    /// steepest first.
+    fn refinement_candidates(&self, factors: &[f32], db: f32, adapt: &AdaptConfig) -> Vec<(u32, u32)> {
+        let mut scored: Vec<(f32, (u32, u32))> = self
+            .mesh
+            .edge_list()
+            .into_iter()
+            .filter_map(|(a, b)| {
+                let (fa, fb) = (factors[a as usize], factors[b as usize]);
+                let local = self.local_irradiance(a, b) + db * fa.max(fb);
+                let len = (self.mesh.vertices[a as usize].pos - self.mesh.vertices[b as usize].pos).length();
+                let steep = db * (fa - fb).abs() / local.max(f32::MIN_POSITIVE);
+                (len > 2.0 * adapt.min_edge && steep > adapt.difference).then_some((steep, (a, b)))
+            })
+            .collect();
+        scored.sort_by(|x, y| y.0.total_cmp(&x.0));
+        scored.into_iter().map(|(_, e)| e).collect()
+    }
+
+    /// The larger irradiance (channels summed) gathered so far at the ends of an edge.
+    fn local_irradiance(&self, a: u32, b: u32) -> f32 {
+        self.irradiance[a as usize].element_sum().max(self.irradiance[b as usize].element_sum())
+    }
+
+    /// Adds the sample point `m` (with this shot's factor `fm`) on edge `(a, b)` and splits it.
+    fn split_at(&mut self, a: u32, b: u32, m: &SamplePoint, fm: f32, factors: &mut Vec<f32>) {
+        let v = self.mesh.add_edge_vertex(a, b, Vec3::from(m.pos));
+        self.mesh.vertices[v as usize].eval = Vec3::from(m.eval);
+        // Earlier shots are interpolated along the edge; this shot is computed exactly.
+        let h = 0.5 * (self.irradiance[a as usize] + self.irradiance[b as usize]);
+        self.irradiance.push(h);
+        factors.push(fm);
+        let before = self.mesh.elements.len();
+        let shrunk = self.mesh.split_edge(a, b, v);
+        self.fix_split_areas(before, &shrunk);
     }
 
     fn midpoint(&self, a: u32, b: u32) -> SamplePoint {

@@ -61,7 +61,8 @@ fn cornell_floor_centre_direct_irradiance() {
 #[test]
 fn cornell_box_energy_balance_and_convergence() {
     let scene = cornell::load(true).expect("scene");
-    let adapt = AdaptConfig { difference: 0.3, nonlinearity: 0.1, min_edge: 5.0, min_shot_power: 0.01, passes: 2 };
+    let adapt =
+        AdaptConfig { difference: 0.3, nonlinearity: 0.1, min_edge: 5.0, min_shot_power: 0.01, passes: 2, max_vertices: 5000 };
     let config = SolverConfig {
         form_factor: FormFactorConfig { rays: 4, ..FormFactorConfig::default() },
         adapt: Some(adapt),

@@ -44,10 +44,10 @@ pub struct Args {
     /// Solver.
     #[arg(long, value_enum, default_value = "reference")]
     pub solver: SolverKind,
-    /// Longest patch (shooter) edge; default: scene diagonal / 8.
+    /// Longest patch (shooter) edge; default: scene diagonal / 6.
     #[arg(long)]
     pub patch_size: Option<f32>,
-    /// Longest element edge; default: scene diagonal / 32.
+    /// Longest element edge; default: scene diagonal / 24.
     #[arg(long)]
     pub element_size: Option<f32>,
     /// Turn adaptive subdivision off.
@@ -59,6 +59,9 @@ pub struct Args {
     /// Adaptive subdivision: relative departure from linearity at the midpoint that splits.
     #[arg(long, default_value_t = 0.1)]
     pub adapt_nonlinearity: f32,
+    /// Adaptive subdivision stops adding sample points beyond this many.
+    #[arg(long, default_value_t = 20_000)]
+    pub max_vertices: usize,
     /// Overshooting factor (1 = none).
     #[arg(long, default_value_t = 1.0)]
     pub overshoot: f64,
@@ -82,13 +85,13 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     let t1 = Instant::now();
     let diag = scene.diagonal();
     let mesh_config = MeshConfig {
-        patch_size: args.patch_size.unwrap_or(diag / 8.0),
-        element_size: args.element_size.unwrap_or(diag / 32.0),
+        patch_size: args.patch_size.unwrap_or(diag / 6.0),
+        element_size: args.element_size.unwrap_or(diag / 24.0),
     };
     let mesh = Mesh::from_scene(&scene, mesh_config);
     let mesh_time = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let mut solver = Solver::new(&scene, mesh, solver_config(&args, diag));
+    let mut solver = Solver::new(&scene, mesh, solver_config(&args, diag, mesh_config.element_size));
     let octree_time = t2.elapsed().as_secs_f64();
     if let Some(path) = &args.reference {
         let text = read(path)?;
@@ -142,13 +145,14 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn solver_config(args: &Args, diag: f32) -> SolverConfig {
+fn solver_config(args: &Args, diag: f32, element_size: f32) -> SolverConfig {
     let adapt = (!args.no_adapt).then_some(AdaptConfig {
         difference: args.adapt_difference,
         nonlinearity: args.adapt_nonlinearity,
-        min_edge: diag / 400.0,
+        min_edge: element_size / 8.0,
         min_shot_power: 0.002,
         passes: 3,
+        max_vertices: args.max_vertices,
     });
     SolverConfig {
         form_factor: FormFactorConfig {
