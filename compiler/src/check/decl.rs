@@ -87,7 +87,7 @@ impl Checker {
                 }
             },
             None => {
-                if !t.ty.is_error() {
+                if !t.ty.is_error() && !self.dynamic_sizes {
                     self.error(
                         DiagnosticKind::NotConstant {
                             context: "an array size",
@@ -282,7 +282,9 @@ impl Checker {
         name: &ast::Name,
         value: &ast::Expr,
     ) {
+        self.dynamic_sizes = true;
         let to = self.ty(ty);
+        self.dynamic_sizes = false;
         let (from, target, assignable) = if val || !super::place::is_element(value) {
             let t = self.expr(value, None);
             (t.ty, None, false)
@@ -414,6 +416,8 @@ impl Checker {
         let pid = self.out.procs.push(info);
         let mark = self.open_scope();
         let first = self.next_symbol();
+        let all_val = params.iter().all(|p| p.mode == ParamMode::Val);
+        let names: Vec<ast::Name> = params.iter().map(|p| p.name.clone()).collect();
         let params: Vec<SymbolId> = params
             .iter()
             .enumerate()
@@ -425,7 +429,12 @@ impl Checker {
             self.process(body);
         }
         if let Some(f) = function {
+            self.param_names = if all_val { names.clone() } else { Vec::new() };
+            let wanted = all_val;
             self.function_body(pid, f);
+            if !wanted {
+                self.fn_bodies.remove(&pid);
+            }
         }
         let usage = self.pop_frame();
         self.open_procs.pop();
@@ -501,6 +510,10 @@ impl Checker {
                 for (e, want) in exprs.iter().zip(&results) {
                     let t = self.expr(e, Some(want));
                     self.expect_type(want, &t.ty, e.span);
+                }
+                if let [single] = exprs.as_slice() {
+                    self.fn_bodies
+                        .insert(pid, (self.param_names.clone(), single.clone()));
                 }
             }
         }

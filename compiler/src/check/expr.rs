@@ -75,6 +75,9 @@ impl Checker {
     /// Checks an expression; `want` is the type the context needs, which untyped literals take.
     pub(super) fn expr(&mut self, e: &Expr, want: Option<&Type>) -> Typed {
         let t = self.expr_kind(e, want);
+        if self.shadow > 0 {
+            return t;
+        }
         self.out.expr_types.insert(e.span, t.ty.clone());
         if let Some(v) = &t.value {
             self.out.constants.insert(e.span, v.clone());
@@ -227,17 +230,17 @@ impl Checker {
         let written = l.ty.as_ref().map(|t| self.ty(t));
         let ctx = written.clone().or_else(|| want.cloned());
         let ctx_prim = ctx.as_ref().and_then(|t| self.out.types.prim(t));
-        let written_prim = written.as_ref().and_then(|t| self.out.types.prim(t));
         let (ty, r) = match &l.kind {
             LitKind::Bool(b) => (Type::BOOL, Ok(Value::Bool(*b))),
             LitKind::String(bytes) => {
                 let n = u32::try_from(bytes.len()).unwrap_or(u32::MAX);
                 (Type::array(Some(n), Type::BYTE), Ok(Value::string(bytes)))
             }
-            // A character is a BYTE unless decorated: `'a'(INT)`.
-            LitKind::Byte(b) => match written_prim.filter(|p| p.is_integer()) {
+            // A character takes an integer type from context, like any untyped literal
+            // (cgtest59: `i := 'a'` for an INT `i`).
+            LitKind::Byte(b) => match ctx_prim.filter(|p| p.is_integer()) {
                 Some(p) => (
-                    written.clone().unwrap_or(Type::BYTE),
+                    ctx.unwrap_or(Type::BYTE),
                     integer(u64::from(*b), false, negate, p),
                 ),
                 None => (Type::BYTE, Ok(Value::Int(i64::from(*b)))),
@@ -472,6 +475,11 @@ impl Checker {
     }
 
     fn table(&mut self, items: &[Expr], want: Option<&Type>, span: ast::Span) -> Typed {
+        if let Some(w) = want
+            && self.out.types.record_fields(w).is_some()
+        {
+            return self.typed_table(items, w.clone(), span);
+        }
         let want_under = want.map(|w| self.out.types.underlying(w).clone());
         let mut elem = want_under.as_ref().and_then(Type::elem).cloned();
         // An untyped table takes a named array type from context: `v := [1.0, 0.0, 0.0]`.

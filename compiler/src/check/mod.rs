@@ -62,6 +62,14 @@ pub(crate) struct Checker {
     /// Inside `SIZE` / `BYTESIN` operands, which name storage without using it.
     quiet: u32,
     options: Options,
+    /// The parameter names of the FUNCTION being declared.
+    param_names: Vec<ast::Name>,
+    /// Inside the type of a RETYPES/RESHAPES, whose array sizes may be variables.
+    dynamic_sizes: bool,
+    /// Above zero while folding a FUNCTION call: expression tables are not written.
+    shadow: u32,
+    /// The `IS` bodies of FUNCTIONs with one result, for folding calls with constant actuals.
+    fn_bodies: std::collections::HashMap<crate::checked::ProcId, (Vec<ast::Name>, ast::Expr)>,
     /// Abbreviations declared before this symbol are ignored by the alias check (see calls).
     alias_floor: Option<SymbolId>,
     /// Tables of non-linear subscripts evaluated per replicator value.
@@ -136,6 +144,10 @@ impl Checker {
             quiet: 0,
             options: Options::default(),
             alias_floor: None,
+            dynamic_sizes: false,
+            param_names: Vec::new(),
+            shadow: 0,
+            fn_bodies: std::collections::HashMap::new(),
             tables: Vec::new(),
             repl_values: std::collections::HashMap::new(),
         };
@@ -210,7 +222,9 @@ impl Checker {
     fn lookup(&mut self, name: &ast::Name) -> Option<SymbolId> {
         match self.scope.lookup(&name.text) {
             Some(id) => {
-                self.out.names.insert(name.span, id);
+                if self.shadow == 0 {
+                    self.out.names.insert(name.span, id);
+                }
                 Some(id)
             }
             None => {

@@ -67,7 +67,9 @@ rejects!(byte_int_mix, "PROC p ()\n  INT x:\n  BYTE b:\n  x := b\n:", 4, "expect
 accepts!(untyped_literal_takes_context, "PROC p ()\n  INT16 s:\n  INT64 l:\n  REAL32 r:\n  SEQ\n    s := 5\n    l := 5\n    r := 2.5\n:");
 accepts!(untyped_literals_in_expressions, "PROC p ()\n  INT16 s:\n  REAL64 r:\n  SEQ\n    s := s + 1\n    r := (r * 2.0) + 1.5\n:");
 accepts!(typed_literals, "PROC p ()\n  INT64 l:\n  l := 5(INT64) + #FF(INT64)\n:");
-rejects!(char_literal_is_byte, "PROC p ()\n  INT x:\n  x := 'a'\n:", 3, "expected INT, found BYTE");
+accepts!(char_literal_takes_context, "PROC p ()\n  INT x:\n  x := 'a'\n:");
+rejects!(char_literal_alone_is_byte, "PROC p ()\n  INT x:\n  BYTE b:\n  x := INT ('a' + b)\n  x := b + 'a'\n:", 5, "expected INT, found BYTE");
+accepts!(record_literal_untyped, "DATA TYPE R\n  RECORD\n    INT i:\n    BYTE b:\n:\nPROC p ()\n  R r:\n  r := [1, 'a']\n:");
 accepts!(char_literal_decorated, "PROC p ()\n  INT x:\n  x := 'a'(INT)\n:");
 rejects!(bad_operand_bool_plus, "PROC p ()\n  BOOL b:\n  b := TRUE + FALSE\n:", 3, "operator + cannot be applied to BOOL");
 rejects!(real_to_int_needs_round, "PROC p ()\n  INT x:\n  REAL32 r:\n  x := INT r\n:", 4, "needs ROUND or TRUNC");
