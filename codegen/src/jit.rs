@@ -64,7 +64,8 @@ impl Jit {
             let mut sig = module.make_signature();
             sig.params
                 .extend(e.params.iter().map(|p| AbiParam::new(abi_type(*p))));
-            sig.returns.extend(e.ret.map(|r| AbiParam::new(abi_type(r))));
+            sig.returns
+                .extend(e.ret.map(|r| AbiParam::new(abi_type(r))));
             let id = module
                 .declare_function(e.name, Linkage::Import, &sig)
                 .map_err(cl_err)?;

@@ -79,7 +79,9 @@ pub fn compile(
                     occ_compiler::checked::SymbolKind::Val { value: Some(c) } => {
                         cx.env.insert(sym, Storage::Const(c.clone()));
                     }
-                    _ => return Err(cx.unsupported(d.span, "a non-constant top-level abbreviation")),
+                    _ => {
+                        return Err(cx.unsupported(d.span, "a non-constant top-level abbreviation"));
+                    }
                 }
             }
             DeclKind::DataType { .. } | DeclKind::Protocol { .. } => {}
@@ -96,12 +98,13 @@ pub fn compile(
     }
     cx.jit.finalize()?;
     let mut info = std::mem::take(&mut cx.info);
-    for (id, pname, resumes) in &cx.funcs {
+    for (id, pname, resumes, channels) in &cx.funcs {
         let code = cx.jit.module.get_finalized_function(*id);
         // SAFETY: every compiled function has the ProcFn signature.
         let f: ProcFn = unsafe { std::mem::transmute::<*const u8, ProcFn>(code) };
         let mut p = ProcInfo::new(pname, f);
         p.resume_locations = resumes.clone();
+        p.channels = channels.clone();
         info.procs.push(p);
     }
     let code = cx.jit.module.get_finalized_function(e.id);

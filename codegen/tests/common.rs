@@ -26,7 +26,9 @@ struct Loader;
 
 impl occ_grammar::preprocess::Loader for Loader {
     fn load(&mut self, name: &str, _from: &str) -> Option<(String, String)> {
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../stdlib").join(name);
+        let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../stdlib")
+            .join(name);
         std::fs::read_to_string(&p)
             .ok()
             .map(|t| (p.to_string_lossy().into_owned(), t))
@@ -36,7 +38,11 @@ impl occ_grammar::preprocess::Loader for Loader {
 /// Compiles `src`; panics with the diagnostics if it does not compile.
 pub fn compile(src: &str) -> occ_codegen::Compiled {
     let parsed = occ_grammar::parse_source("test.occ", src, &mut Loader);
-    assert!(!parsed.has_errors(), "parse errors: {:?}", parsed.diagnostics);
+    assert!(
+        !parsed.has_errors(),
+        "parse errors: {:?}",
+        parsed.diagnostics
+    );
     let (checked, diags) = occ_compiler::check(&parsed.program);
     let checked = checked.unwrap_or_else(|| {
         panic!(

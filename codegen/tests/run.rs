@@ -158,7 +158,8 @@ fn stop_halts_with_its_line() {
 
 #[test]
 fn deadlock_is_reported() {
-    let src = "PROC main (CHAN BYTE keyboard?, screen!, error!)\n  CHAN INT c:\n  INT x:\n  c ? x\n:\n";
+    let src =
+        "PROC main (CHAN BYTE keyboard?, screen!, error!)\n  CHAN INT c:\n  INT x:\n  c ? x\n:\n";
     let o = run_with(src, "");
     match o.result {
         Err(occ_runtime::RunError::Deadlock(_)) => {}

@@ -27,12 +27,73 @@ pub struct Unavailable;
 /// The reason shown for tests that could not be run.
 pub const SKIP_REASON: &str = "no code generator yet";
 
-/// Runs the program in `path` with `stdin` as its keyboard input.
+/// How long one test program may run before it is killed.
+const TIME_LIMIT: std::time::Duration = std::time::Duration::from_secs(20);
+
+/// Runs the program in `path` with `stdin` as its keyboard input, in a child `occ run` process
+/// (so that a crash or hang of the program under test cannot take the harness down), killed after
+/// [`TIME_LIMIT`].
 pub fn run_program(
     path: &Path,
     include_dirs: &[std::path::PathBuf],
     stdin: &str,
 ) -> Result<Execution, Unavailable> {
-    let _ = (path, include_dirs, stdin);
-    Err(Unavailable)
+    use std::io::{Read, Write};
+    use std::process::{Command, Stdio};
+    let exe = std::env::current_exe().map_err(|_| Unavailable)?;
+    let mut cmd = Command::new(exe);
+    cmd.arg("run").arg(path);
+    for d in include_dirs {
+        cmd.arg("-I").arg(d);
+    }
+    let mut child = cmd
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|_| Unavailable)?;
+    let input = stdin.as_bytes().to_vec();
+    let mut child_in = child.stdin.take();
+    let feeder = std::thread::spawn(move || {
+        if let Some(w) = child_in.as_mut() {
+            let _ = w.write_all(&input);
+        }
+    });
+    let mut out_pipe = child.stdout.take();
+    let mut err_pipe = child.stderr.take();
+    let out_reader = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        if let Some(r) = out_pipe.as_mut() {
+            let _ = r.read_to_end(&mut s);
+        }
+        s
+    });
+    let err_reader = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        if let Some(r) = err_pipe.as_mut() {
+            let _ = r.read_to_end(&mut s);
+        }
+        s
+    });
+    let start = std::time::Instant::now();
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(st)) => break st.code(),
+            Ok(None) if start.elapsed() > TIME_LIMIT => {
+                let _ = child.kill();
+                let _ = child.wait();
+                break None;
+            }
+            Ok(None) => std::thread::sleep(std::time::Duration::from_millis(5)),
+            Err(_) => break None,
+        }
+    };
+    let _ = feeder.join();
+    let stdout = out_reader.join().unwrap_or_default();
+    let stderr = err_reader.join().unwrap_or_default();
+    Ok(Execution {
+        stdout: String::from_utf8_lossy(&stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&stderr).into_owned(),
+        status,
+    })
 }

@@ -38,12 +38,15 @@ impl<'p> Compiler<'p> {
             slots.push((off, by_value));
             types.push(ty);
         }
-        let (id, words) = self.function(&name.text, depth, frame, d.span, |tr| {
+        let outer = std::mem::replace(&mut self.proc_name, name.text.clone());
+        let r = self.function(&name.text, depth, frame, d.span, |tr| {
             tr.process(body)?;
             let done = tr.iconst(0);
             tr.ret(done);
             Ok(())
-        })?;
+        });
+        self.proc_name = outer;
+        let (id, words) = r?;
         let entry = ProcEntry {
             id,
             frame_words: words,

@@ -82,11 +82,14 @@ impl Tr<'_, '_> {
             }
             DeclKind::Function { name, .. } => {
                 let sym = self.cx.symbol(name)?;
-                self.cx.env.insert(sym, Storage::Function(std::rc::Rc::new(d.clone())));
+                self.cx
+                    .env
+                    .insert(sym, Storage::Function(std::rc::Rc::new(d.clone())));
                 Ok(())
             }
             DeclKind::Place { .. } => Err(self.cx.unsupported(d.span, "PLACE")),
             DeclKind::Asm(_) => Err(self.cx.unsupported(d.span, "ASM / GUY blocks")),
+            DeclKind::PlaceIn { .. } => Ok(()),
             #[allow(unreachable_patterns)]
             _ => Err(self.cx.unsupported(d.span, "this declaration")),
         }
@@ -107,6 +110,11 @@ impl Tr<'_, '_> {
         if matches!(crate::layout::base_elem(&ty), Type::Chan(..)) {
             // Channel words start empty.
             let size = size_of(&self.cx.checked.types, &ty).unwrap_or(8);
+            self.channels.push(occ_runtime::program::ChannelName {
+                offset: i64::from(off / 8),
+                count: (size / 8) as u32,
+                name: n.text.clone(),
+            });
             let zero = self.iconst(0);
             for i in 0..size / 8 {
                 let a = self.local_addr(off + (i * 8) as i32);

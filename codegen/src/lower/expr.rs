@@ -66,9 +66,11 @@ impl Tr<'_, '_> {
             ExprKind::Size(te) => match &**te {
                 TypeOrExpr::Expr(x) => {
                     let l = self.place(x)?;
-                    let n = l.dims.first().copied().ok_or_else(|| {
-                        self.cx.internal(e.span, "SIZE of a non-array")
-                    })?;
+                    let n = l
+                        .dims
+                        .first()
+                        .copied()
+                        .ok_or_else(|| self.cx.internal(e.span, "SIZE of a non-array"))?;
                     Ok(self.b.ins().ireduce(types::I32, n))
                 }
                 TypeOrExpr::Type(_) => Err(self.cx.internal(e.span, "SIZE of a type")),
@@ -132,6 +134,12 @@ impl Tr<'_, '_> {
             | ExprKind::Slice { .. }
             | ExprKind::Directed { .. } => self.place(e),
             ExprKind::Table(items) => self.table(items, ty, e),
+            ExprKind::TypedTable { items, .. } => {
+                match crate::layout::record_fields(&self.cx.checked.types, &ty) {
+                    Some(fields) => self.record_value(items, fields, ty, e),
+                    None => self.table(items, ty, e),
+                }
+            }
             _ if is_scalar(&self.cx.checked.types, &ty) => {
                 let v = self.expr(e)?;
                 let size = size_of(&self.cx.checked.types, &ty).unwrap_or(8);
@@ -148,6 +156,28 @@ impl Tr<'_, '_> {
                 .cx
                 .unsupported(e.span, "this array- or record-valued expression")),
         }
+    }
+
+    fn record_value(
+        &mut self,
+        items: &[Expr],
+        fields: Vec<(String, i64, Type)>,
+        ty: Type,
+        e: &Expr,
+    ) -> Res<Loc> {
+        let size = size_of(&self.cx.checked.types, &ty)
+            .ok_or_else(|| self.cx.internal(e.span, "record size"))?;
+        let off = self.frame.alloc(size);
+        let base = self.local_addr(off);
+        for (it, (_, foff, fty)) in items.iter().zip(fields) {
+            let at = self.b.ins().iadd_imm_s(base, foff);
+            self.assign_to(at, &fty, &[], it)?;
+        }
+        Ok(Loc {
+            addr: base,
+            ty,
+            dims: vec![],
+        })
     }
 
     fn table(&mut self, items: &[Expr], ty: Type, e: &Expr) -> Res<Loc> {

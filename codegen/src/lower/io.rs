@@ -161,7 +161,7 @@ impl Tr<'_, '_> {
                 let l = self.place(data)?;
                 if let Some(&dim) = l.dims.first() {
                     let ok = self.b.ins().icmp(IntCC::UnsignedLessThanOrEqual, n, dim);
-                    self.check(ok, ErrorKind::MessageLength, span);
+                    self.check(ok, ErrorKind::Segment, span);
                 }
                 let es = self.elem_size(&l, span)?;
                 let size = self.b.ins().imul(n, es);

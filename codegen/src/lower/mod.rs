@@ -34,7 +34,7 @@ use occ_grammar::ast::{self, Span};
 use occ_grammar::source_map::SourceMap;
 use occ_runtime::ErrorKind;
 use occ_runtime::abi::{Status, slot};
-use occ_runtime::program::ProgramInfo;
+use occ_runtime::program::{ChannelName, ProgramInfo};
 
 use crate::error::CodegenError;
 use crate::frame::{FIRST_LOCAL, Frame};
@@ -102,19 +102,17 @@ pub struct Compiler<'p> {
     pub info: ProgramInfo,
     /// Constant data referenced by address from compiled code.
     pub data: Vec<Box<[u8]>>,
-    /// Every compiled function: id, runtime name, resume locations.
-    pub funcs: Vec<(FuncId, String, Vec<u32>)>,
+    /// Every compiled function: id, runtime name, resume locations, channels declared.
+    pub funcs: Vec<(FuncId, String, Vec<u32>, Vec<ChannelName>)>,
+    /// The name of the PROC being compiled (PAR branches report it).
+    pub proc_name: String,
     locations: HashMap<(usize, usize), u32>,
 }
 
 impl<'p> Compiler<'p> {
     /// Starts compiling `checked` (spans mapped through `map`).
     pub fn new(checked: &'p CheckedProgram, map: &'p SourceMap) -> Res<Compiler<'p>> {
-        let decl_syms = checked
-            .symbols
-            .iter()
-            .map(|(id, s)| (s.span, id))
-            .collect();
+        let decl_syms = checked.symbols.iter().map(|(id, s)| (s.span, id)).collect();
         Ok(Compiler {
             checked,
             map,
@@ -124,6 +122,7 @@ impl<'p> Compiler<'p> {
             info: ProgramInfo::default(),
             data: Vec::new(),
             funcs: Vec::new(),
+            proc_name: String::new(),
             locations: HashMap::new(),
         })
     }
@@ -244,14 +243,20 @@ impl<'p> Compiler<'p> {
                 exit,
                 in_expr: 0,
                 no_poll: 0,
+                channels: Vec::new(),
             };
             let r = body(&mut tr);
             r.map(|()| tr.finish(dispatch))
         };
         match built {
-            Ok((words, resumes)) => {
+            Ok((words, resumes, channels)) => {
                 self.jit.define(id, fc)?;
-                self.funcs.push((id, name.to_string(), resumes));
+                let shown = if self.proc_name.is_empty() {
+                    name.to_string()
+                } else {
+                    self.proc_name.clone()
+                };
+                self.funcs.push((id, shown, resumes, channels));
                 Ok((id, words))
             }
             Err(e) => {
@@ -284,6 +289,8 @@ pub struct Tr<'a, 'p> {
     pub in_expr: u32,
     /// Non-zero while enabling or disabling ALT guards: loops do not poll.
     pub no_poll: u32,
+    /// Channels declared in this frame (for deadlock reports).
+    pub channels: Vec<ChannelName>,
 }
 
 /// Memory flags for workspace data (not necessarily aligned).
@@ -295,7 +302,7 @@ pub fn mem() -> MemFlagsData {
 
 impl<'p> Tr<'_, 'p> {
     /// Emits the entry dispatch and the exit block, and finishes the function.
-    fn finish(mut self, dispatch: Block) -> (u32, Vec<u32>) {
+    fn finish(mut self, dispatch: Block) -> (u32, Vec<u32>, Vec<ChannelName>) {
         self.b.switch_to_block(self.exit);
         let st = self.b.block_params(self.exit)[0];
         self.b.ins().return_(&[st]);
@@ -316,6 +323,7 @@ impl<'p> Tr<'_, 'p> {
         (
             self.frame.words(),
             self.resumes.iter().map(|r| r.1).collect(),
+            self.channels,
         )
     }
 
@@ -462,10 +470,7 @@ impl<'p> Tr<'_, 'p> {
     pub fn frame_at(&mut self, depth: u32) -> Value {
         let mut v = self.ws;
         for _ in depth..self.depth {
-            v = self
-                .b
-                .ins()
-                .load(types::I64, MemFlagsData::trusted(), v, 0);
+            v = self.b.ins().load(types::I64, MemFlagsData::trusted(), v, 0);
         }
         v
     }

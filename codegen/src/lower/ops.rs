@@ -220,7 +220,12 @@ impl Tr<'_, '_> {
         span: Span,
     ) -> Res<Value> {
         let (ft, tt) = (cl_type(from), cl_type(to));
-        if from == to || (ft == tt && !matches!((from, to), (Prim::Bool, _) | (_, Prim::Bool)) && from != Prim::Byte && to != Prim::Byte) {
+        if from == to
+            || (ft == tt
+                && !matches!((from, to), (Prim::Bool, _) | (_, Prim::Bool))
+                && from != Prim::Byte
+                && to != Prim::Byte)
+        {
             return Ok(v);
         }
         match (from.is_real(), to.is_real()) {
@@ -283,10 +288,7 @@ impl Tr<'_, '_> {
         let (lo, hi) = to.int_range().unwrap_or((0, 1));
         let flo = self.b.ins().f64const(lo as f64);
         let fhi = self.b.ins().f64const(hi as f64 + 1.0);
-        let a = self
-            .b
-            .ins()
-            .fcmp(FloatCC::GreaterThanOrEqual, r64, flo);
+        let a = self.b.ins().fcmp(FloatCC::GreaterThanOrEqual, r64, flo);
         let b = self.b.ins().fcmp(FloatCC::LessThan, r64, fhi);
         let ok = self.b.ins().band(a, b);
         self.check(ok, ErrorKind::Conversion, span);

@@ -21,17 +21,25 @@ impl Tr<'_, '_> {
             let sym = self.cx.symbol(&r.name)?;
             self.cx.env.insert(sym, Storage::Var { depth, offset: off });
         }
-        self.cx.function("par.branch", depth, frame, body.span, |tr| {
-            tr.process(body)?;
-            let j = tr.b.ins().load(types::I64, mem(), tr.ws, 8);
-            let st = tr.call_rt("rt_endp", &[tr.node, tr.ws, j]);
-            tr.ret(st);
-            Ok(())
-        })
+        self.cx
+            .function("par.branch", depth, frame, body.span, |tr| {
+                tr.process(body)?;
+                let j = tr.b.ins().load(types::I64, mem(), tr.ws, 8);
+                let st = tr.call_rt("rt_endp", &[tr.node, tr.ws, j]);
+                tr.ret(st);
+                Ok(())
+            })
     }
 
     /// Sets up and starts the branch whose workspace is at `child`.
-    fn start(&mut self, child: Value, id: FuncId, join_off: i32, high: bool, span: Span) -> Res<()> {
+    fn start(
+        &mut self,
+        child: Value,
+        id: FuncId,
+        join_off: i32,
+        high: bool,
+        span: Span,
+    ) -> Res<()> {
         self.b.ins().store(mem(), self.ws, child, 0);
         let j = self.local_addr(join_off);
         self.b.ins().store(mem(), j, child, 8);
@@ -70,7 +78,9 @@ impl Tr<'_, '_> {
         let mut branches = Vec::new();
         for p in body {
             let (id, words) = self.branch(p, None)?;
-            let at = self.frame.alloc(i64::from(HEADER_BYTES) + 8 * i64::from(words));
+            let at = self
+                .frame
+                .alloc(i64::from(HEADER_BYTES) + 8 * i64::from(words));
             branches.push((id, at + HEADER_BYTES));
         }
         for (i, (id, wptr)) in branches.into_iter().enumerate() {
@@ -93,13 +103,20 @@ impl Tr<'_, '_> {
         };
         let count = match self.cx.checked.constants.get(&r.count.span) {
             Some(occ_compiler::consteval::Value::Int(n)) => (*n).max(0),
-            _ => return Err(self.cx.unsupported(span, "replicated PAR with a variable count")),
+            _ => {
+                return Err(self
+                    .cx
+                    .unsupported(span, "replicated PAR with a variable count"));
+            }
         };
         let (id, words) = self.branch(p, Some(r))?;
         let stride = i64::from(HEADER_BYTES) + 8 * i64::from(words);
         let area = self.frame.alloc(stride * count.max(1));
-        let (k_off, base_off, step_off) =
-            (self.frame.alloc(8), self.frame.alloc(8), self.frame.alloc(8));
+        let (k_off, base_off, step_off) = (
+            self.frame.alloc(8),
+            self.frame.alloc(8),
+            self.frame.alloc(8),
+        );
         let base = self.expr(&r.base)?;
         let step = match &r.step {
             Some(s) => self.expr(s)?,

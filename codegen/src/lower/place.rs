@@ -145,11 +145,10 @@ impl Tr<'_, '_> {
 
     /// Byte size of one element of array place `l` (dynamic when inner dimensions are open).
     pub fn elem_size(&mut self, l: &Loc, span: Span) -> Res<Value> {
-        let elem = l
-            .ty
-            .elem()
-            .cloned()
-            .ok_or_else(|| self.cx.internal(span, "subscript of a non-array"))?;
+        let elem =
+            l.ty.elem()
+                .cloned()
+                .ok_or_else(|| self.cx.internal(span, "subscript of a non-array"))?;
         self.size_of_loc(&elem, &l.dims[1.min(l.dims.len())..], span)
     }
 
@@ -232,7 +231,10 @@ impl Tr<'_, '_> {
             return v;
         }
         let unsigned = matches!(
-            self.cx.checked.types.prim(&self.cx.type_of(e).unwrap_or(Type::INT)),
+            self.cx
+                .checked
+                .types
+                .prim(&self.cx.type_of(e).unwrap_or(Type::INT)),
             Some(occ_compiler::types::Prim::Byte | occ_compiler::types::Prim::Bool)
         );
         if unsigned {

@@ -10,7 +10,12 @@ use super::{Res, Tr};
 
 impl Tr<'_, '_> {
     /// Lowers a call of predefined FUNCTION `name`.
-    pub fn predefined_function(&mut self, name: &str, args: &[Expr], span: Span) -> Res<Vec<Value>> {
+    pub fn predefined_function(
+        &mut self,
+        name: &str,
+        args: &[Expr],
+        span: Span,
+    ) -> Res<Vec<Value>> {
         let mut v = Vec::new();
         for a in args {
             v.push(self.expr(a)?);

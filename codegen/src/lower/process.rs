@@ -39,9 +39,7 @@ impl Tr<'_, '_> {
             ProcessKind::Assign { lhs, rhs } => self.assign(lhs, rhs, p.span),
             ProcessKind::Output { chan, items } => self.output(chan, items, p.span),
             ProcessKind::Input { chan, items } => self.input(chan, items, p.span),
-            ProcessKind::CaseInput { chan, variants } => {
-                self.case_input(chan, variants, p.span)
-            }
+            ProcessKind::CaseInput { chan, variants } => self.case_input(chan, variants, p.span),
             ProcessKind::Delay { time, .. } => {
                 let t = self.expr(time)?;
                 let t = self.b.ins().sextend(types::I64, t);
@@ -49,9 +47,9 @@ impl Tr<'_, '_> {
             }
             ProcessKind::Seq { repl, body } => match repl {
                 None => body.iter().try_for_each(|q| self.process(q)),
-                Some(r) => self.replicated(r, p.span, |tr| {
-                    body.iter().try_for_each(|q| tr.process(q))
-                }),
+                Some(r) => {
+                    self.replicated(r, p.span, |tr| body.iter().try_for_each(|q| tr.process(q)))
+                }
             },
             ProcessKind::If { repl, choices } => {
                 let done = self.b.create_block();
@@ -275,7 +273,9 @@ impl Tr<'_, '_> {
                 } else {
                     let src = self.value_loc(e)?;
                     let size = self.loc_size(&src, e.span)?;
-                    let off = self.frame.alloc(crate::layout::size_of(&self.cx.checked.types, &ty).unwrap_or(0));
+                    let off = self
+                        .frame
+                        .alloc(crate::layout::size_of(&self.cx.checked.types, &ty).unwrap_or(0));
                     let tmp = self.local_addr(off);
                     self.copy_bytes(tmp, src.addr, size);
                     out.push((tmp, ty));
