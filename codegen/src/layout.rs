@@ -6,7 +6,7 @@
 //! runtime [`occ_runtime::abi::Word`] (8 bytes) each, as the runtime's channel word is a word.
 
 use cranelift_codegen::ir::types;
-use occ_compiler::types::{Prim, Type, TypeDefKind, TypeTable, bytes_in};
+use occ_compiler::types::{Prim, Type, TypeTable, bytes_in};
 
 /// Bytes of a runtime word.
 pub const WORD: i64 = 8;
@@ -32,6 +32,14 @@ pub fn size_of(table: &TypeTable, ty: &Type) -> Option<i64> {
         Type::Named(_) => bytes_in(table, ty).ok().map(i64::from),
         Type::Chan(..) | Type::Timer | Type::Port(_) => Some(WORD),
         Type::Error => None,
+    }
+}
+
+/// `ty` with every `DATA TYPE` alias resolved, at the top and inside arrays (records stay named).
+pub fn resolve(table: &TypeTable, ty: &Type) -> Type {
+    match table.underlying(ty) {
+        Type::Array(n, e) => Type::Array(*n, Box::new(resolve(table, e))),
+        t => t.clone(),
     }
 }
 
@@ -71,14 +79,6 @@ pub fn is_scalar(table: &TypeTable, ty: &Type) -> bool {
 /// The fields of record `ty` with their byte offsets and types.
 pub fn record_fields(table: &TypeTable, ty: &Type) -> Option<Vec<(String, i64, Type)>> {
     let fields = table.record_fields(ty)?;
-    let packed = match table.underlying(ty) {
-        Type::Named(id) => matches!(
-            table.defs.get(*id).map(|d| &d.kind),
-            Some(TypeDefKind::Record { packed: true, .. })
-        ),
-        _ => false,
-    };
-    let _ = packed;
     fields
         .iter()
         .map(|(name, t)| {

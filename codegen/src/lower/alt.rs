@@ -44,7 +44,9 @@ fn cond_of(a: &Alternative) -> Option<&Expr> {
 fn guard_of(a: &Alternative) -> Option<Guard<'_>> {
     match &a.kind {
         AltKind::Guarded { guard, .. } => match &guard.kind {
-            ProcessKind::Input { chan, .. } => Some(Guard::Chan(chan)),
+            ProcessKind::Input { chan, .. } | ProcessKind::CaseInput { chan, .. } => {
+                Some(Guard::Chan(chan))
+            }
             ProcessKind::Delay { time, .. } => Some(Guard::Timer(time)),
             ProcessKind::Skip => Some(Guard::Skip),
             _ => None,
@@ -260,7 +262,7 @@ impl Tr<'_, '_> {
     fn run_alternative(&mut self, a: &Alternative) -> Res<()> {
         match &a.kind {
             AltKind::Guarded { guard, body, .. } => {
-                if let ProcessKind::Input { .. } = &guard.kind {
+                if let ProcessKind::Input { .. } | ProcessKind::CaseInput { .. } = &guard.kind {
                     self.process(guard)?;
                 }
                 self.process(body)

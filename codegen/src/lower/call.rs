@@ -93,7 +93,12 @@ impl Tr<'_, '_> {
         for (i, a) in args.iter().enumerate() {
             let (off, by_value) = entry.params[i];
             if by_value {
-                stores.push((off, vec![self.expr(a)?]));
+                let v = self.expr(a)?;
+                let v = match self.cx.checked.types.prim(&entry.param_types[i]) {
+                    Some(p) => self.coerce(v, crate::layout::cl_type(p)),
+                    None => v,
+                };
+                stores.push((off, vec![v]));
             } else {
                 let l = self.place(a)?;
                 let mut vs = vec![l.addr];

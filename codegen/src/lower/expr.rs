@@ -104,7 +104,8 @@ impl Tr<'_, '_> {
     }
 
     fn unary(&mut self, op: UnOp, x: &Expr, e: &Expr) -> Res<Value> {
-        let p = self.prim_of(e)?;
+        let _ = e;
+        let p = self.prim_of(x)?;
         let v = self.expr(x)?;
         Ok(match op {
             UnOp::Not => self.b.ins().bxor_imm_s(v, 1),
@@ -114,7 +115,8 @@ impl Tr<'_, '_> {
                 if p.is_real() {
                     self.b.ins().fneg(v)
                 } else {
-                    let zero = self.b.ins().iconst(cl_type(p), 0);
+                    let t = self.b.func.dfg.value_type(v);
+                    let zero = self.b.ins().iconst(t, 0);
                     self.arith(occ_grammar::ast::BinOp::Sub, p, zero, v, e.span)?
                 }
             }
@@ -205,8 +207,9 @@ impl Tr<'_, '_> {
 
     /// Stores the value of `e` into the place at `addr` of type `ty` (dims for open arrays).
     pub fn assign_to(&mut self, addr: Value, ty: &Type, dims: &[Value], e: &Expr) -> Res<()> {
-        if is_scalar(&self.cx.checked.types, ty) {
+        if let Some(p) = self.cx.checked.types.prim(ty) {
             let v = self.expr(e)?;
+            let v = self.coerce(v, cl_type(p));
             self.store_scalar(v, addr);
             return Ok(());
         }

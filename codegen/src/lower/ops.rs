@@ -22,7 +22,13 @@ impl Tr<'_, '_> {
         }
         let p = self.prim_of(lhs)?;
         let a = self.expr(lhs)?;
+        let a = self.coerce(a, cl_type(p));
         let b = self.expr(rhs)?;
+        let b = if matches!(op, BinOp::Shl | BinOp::Shr) {
+            b
+        } else {
+            self.coerce(b, cl_type(p))
+        };
         match op {
             BinOp::Eq | BinOp::Ne | BinOp::Lt | BinOp::Gt | BinOp::Le | BinOp::Ge => {
                 Ok(self.compare(op, p, a, b))
@@ -33,6 +39,24 @@ impl Tr<'_, '_> {
             }
             BinOp::Shl | BinOp::Shr => self.shift(op, p, a, b, e.span),
             _ => self.arith(op, p, a, b, e.span),
+        }
+    }
+
+    /// Makes `v` a value of Cranelift type `t` (sign-extending or truncating integers, promoting
+    /// or demoting floats); the checker's types and the stored widths agree, so this only
+    /// bridges context-typed constants.
+    pub fn coerce(&mut self, v: Value, t: types::Type) -> Value {
+        let vt = self.b.func.dfg.value_type(v);
+        if vt == t {
+            return v;
+        }
+        match (vt.is_float(), t.is_float()) {
+            (false, false) if vt.bits() < t.bits() => self.b.ins().sextend(t, v),
+            (false, false) => self.b.ins().ireduce(t, v),
+            (true, true) if vt.bits() < t.bits() => self.b.ins().fpromote(t, v),
+            (true, true) => self.b.ins().fdemote(t, v),
+            (false, true) => self.b.ins().fcvt_from_sint(t, v),
+            (true, false) => self.b.ins().fcvt_to_sint_sat(t, v),
         }
     }
 
@@ -220,6 +244,7 @@ impl Tr<'_, '_> {
         span: Span,
     ) -> Res<Value> {
         let (ft, tt) = (cl_type(from), cl_type(to));
+        let v = self.coerce(v, ft);
         if from == to
             || (ft == tt
                 && !matches!((from, to), (Prim::Bool, _) | (_, Prim::Bool))
@@ -245,9 +270,9 @@ impl Tr<'_, '_> {
     }
 
     fn int_convert(&mut self, v: Value, from: Prim, to: Prim, span: Span) -> Value {
-        let (ft, tt) = (cl_type(from), cl_type(to));
+        let tt = cl_type(to);
         let unsigned = matches!(from, Prim::Byte | Prim::Bool);
-        let w = if ft == types::I64 {
+        let w = if self.b.func.dfg.value_type(v) == types::I64 {
             v
         } else if unsigned {
             self.b.ins().uextend(types::I64, v)

@@ -51,6 +51,7 @@ impl Tr<'_, '_> {
 
     /// The place of a name with storage `st` and type `ty`.
     pub fn storage_loc(&mut self, st: &Storage, ty: Type, span: Span) -> Res<Loc> {
+        let ty = crate::layout::resolve(&self.cx.checked.types, &ty);
         let sd = static_dims(&ty);
         match st {
             Storage::Var { depth, offset } => {
@@ -89,6 +90,7 @@ impl Tr<'_, '_> {
 
     /// A constant placed in memory (read-only program data).
     pub fn const_loc(&mut self, c: &Const, ty: Type, span: Span) -> Res<Loc> {
+        let ty = crate::layout::resolve(&self.cx.checked.types, &ty);
         let mut bytes = Vec::new();
         self.encode(c, &ty, &mut bytes, span)?;
         let addr = self.cx.intern(bytes);
@@ -191,6 +193,7 @@ impl Tr<'_, '_> {
                 .find(|(n, _, _)| *n == field.text)
                 .ok_or_else(|| self.cx.internal(span, "no such field"))?;
             let addr = self.b.ins().iadd_imm_s(b.addr, off);
+            let fty = crate::layout::resolve(table, &fty);
             let dims = static_dims(&fty)
                 .iter()
                 .map(|d| self.iconst(i64::from(d.unwrap_or(0))))

@@ -53,13 +53,8 @@ impl Tr<'_, '_> {
             }
             ("LONGSUB", [a, b, c]) => {
                 let c1 = self.b.ins().band_imm_s(*c, 1);
-                let nb = self.b.ins().bnot(*b);
-                let cin = self.b.ins().bxor_imm_s(c1, 1);
-                let _ = nb;
-                let d = self.b.ins().ssub_overflow(*a, *b);
-                let (r1, o1) = d;
+                let (r1, o1) = self.b.ins().ssub_overflow(*a, *b);
                 let (r2, o2) = self.b.ins().ssub_overflow(r1, c1);
-                let _ = cin;
                 let o = self.b.ins().bor(o1, o2);
                 let ok = self.b.ins().bxor_imm_s(o, 1);
                 self.check(ok, ErrorKind::Overflow, span);
@@ -100,10 +95,74 @@ impl Tr<'_, '_> {
                 let lo = self.b.ins().ireduce(types::I32, p);
                 Ok(vec![hi, lo])
             }
+            ("LONGDIV", [hi, lo, d]) => {
+                let (hi, lo, d) = (*hi, *lo, *d);
+                let ok = self.b.ins().icmp(
+                    cranelift_codegen::ir::condcodes::IntCC::UnsignedLessThan,
+                    hi,
+                    d,
+                );
+                self.check(ok, ErrorKind::Overflow, span);
+                let n = self.pair(hi, lo);
+                let d = self.b.ins().uextend(types::I64, d);
+                let q = self.b.ins().udiv(n, d);
+                let r = self.b.ins().urem(n, d);
+                let q = self.b.ins().ireduce(types::I32, q);
+                let r = self.b.ins().ireduce(types::I32, r);
+                Ok(vec![q, r])
+            }
+            ("SHIFTLEFT" | "SHIFTRIGHT", [hi, lo, n]) => {
+                let v = self.pair(*hi, *lo);
+                let n = self.b.ins().uextend(types::I64, *n);
+                let big = self.b.ins().icmp_imm_s(
+                    cranelift_codegen::ir::condcodes::IntCC::UnsignedGreaterThanOrEqual,
+                    n,
+                    64,
+                );
+                let r = if name == "SHIFTLEFT" {
+                    self.b.ins().ishl(v, n)
+                } else {
+                    self.b.ins().ushr(v, n)
+                };
+                let zero = self.b.ins().iconst(types::I64, 0);
+                let r = self.b.ins().select(big, zero, r);
+                Ok(self.split(r))
+            }
+            ("NORMALISE", [hi, lo]) => {
+                let v = self.pair(*hi, *lo);
+                let z = self.b.ins().clz(v);
+                let is0 =
+                    self.b
+                        .ins()
+                        .icmp_imm_s(cranelift_codegen::ir::condcodes::IntCC::Equal, v, 0);
+                let r = self.b.ins().ishl(v, z);
+                let zero = self.b.ins().iconst(types::I64, 0);
+                let r = self.b.ins().select(is0, zero, r);
+                let places = self.b.ins().ireduce(types::I32, z);
+                let mut out = vec![places];
+                out.extend(self.split(r));
+                Ok(out)
+            }
             _ => Err(self
                 .cx
                 .unsupported(span, format!("the predefined FUNCTION {name}"))),
         }
+    }
+
+    /// The unsigned 64-bit value `hi:lo` of two INTs.
+    fn pair(&mut self, hi: Value, lo: Value) -> Value {
+        let h = self.b.ins().uextend(types::I64, hi);
+        let h = self.b.ins().ishl_imm_s(h, 32);
+        let l = self.b.ins().uextend(types::I64, lo);
+        self.b.ins().bor(h, l)
+    }
+
+    /// Splits a 64-bit value into (hi, lo) INTs.
+    fn split(&mut self, v: Value) -> Vec<Value> {
+        let h = self.b.ins().ushr_imm_s(v, 32);
+        let h = self.b.ins().ireduce(types::I32, h);
+        let l = self.b.ins().ireduce(types::I32, v);
+        vec![h, l]
     }
 
     fn checked_add3(&mut self, a: Value, b: Value, c: Value, span: Span) -> Value {

@@ -252,9 +252,30 @@ impl Tr<'_, '_> {
 
     fn assign(&mut self, lhs: &[Expr], rhs: &[Expr], span: Span) -> Res<()> {
         if lhs.len() == 1 && rhs.len() == 1 {
+            // The value first: it may call a PROC (in a VALOF), after which only values
+            // computed later may be used.
+            let ty = self
+                .cx
+                .type_of(&lhs[0])
+                .or_else(|_| self.cx.type_of(&rhs[0]))?;
+            if let Some(p) = self.cx.checked.types.prim(&ty) {
+                let v = self.expr(&rhs[0])?;
+                let v = self.coerce(v, crate::layout::cl_type(p));
+                let l = self.place(&lhs[0])?;
+                self.store_scalar(v, l.addr);
+                return Ok(());
+            }
+            let src = self.value_loc(&rhs[0])?;
+            let size = self.loc_size(&src, span)?;
             let l = self.place(&lhs[0])?;
             let dims = self.open_dims(&l);
-            return self.assign_to(l.addr, &l.ty, &dims, &rhs[0]);
+            if !dims.is_empty() {
+                let dst = self.loc_size(&l, span)?;
+                let ok = self.b.ins().icmp(IntCC::Equal, size, dst);
+                self.check(ok, ErrorKind::Segment, span);
+            }
+            self.copy_bytes(l.addr, src.addr, size);
+            return Ok(());
         }
         // Multiple assignment: evaluate every value first, then store.
         let vals: Vec<(Value, Type)> = if rhs.len() == 1 && lhs.len() > 1 {
