@@ -146,15 +146,17 @@ impl Checker {
     /// its body again with the parameters bound to the actuals (occ21 folds these too:
     /// `[sum (1, 2)]INT a:`). Leaves no trace: no tables written, no diagnostics kept.
     fn fold_call(&mut self, name: &ast::Name, args: &[Expr]) -> Option<Value> {
-        let id = *self.out.names.get(&name.span)?;
+        let id = self.scope.lookup(&name.text)?;
         let SymbolKind::Function(pid) = self.sym(id).kind else {
             return None;
         };
         let (params, body) = self.fn_bodies.get(&pid)?.clone();
-        let values: Option<Vec<Value>> = args
-            .iter()
-            .map(|a| self.out.constants.get(&a.span).cloned())
-            .collect();
+        let table = if self.shadow > 0 {
+            &self.shadow_constants
+        } else {
+            &self.out.constants
+        };
+        let values: Option<Vec<Value>> = args.iter().map(|a| table.get(&a.span).cloned()).collect();
         let values = values.filter(|v| v.len() == params.len())?;
         if self.shadow > 8 {
             return None;
@@ -181,6 +183,9 @@ impl Checker {
         let t = self.expr(&body, result.as_ref());
         self.quiet -= 1;
         self.shadow -= 1;
+        if self.shadow == 0 {
+            self.shadow_constants.clear();
+        }
         self.close_scope(mark);
         self.diags.truncate(diags);
         t.value

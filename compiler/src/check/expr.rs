@@ -76,6 +76,9 @@ impl Checker {
     pub(super) fn expr(&mut self, e: &Expr, want: Option<&Type>) -> Typed {
         let t = self.expr_kind(e, want);
         if self.shadow > 0 {
+            if let Some(v) = &t.value {
+                self.shadow_constants.insert(e.span, v.clone());
+            }
             return t;
         }
         self.out.expr_types.insert(e.span, t.ty.clone());
@@ -348,13 +351,11 @@ impl Checker {
             let rt = self.expr(rhs, Some(&Type::INT));
             self.expect_type(&Type::INT, &rt.ty, rhs.span);
             (lt, rt)
-        } else if want.is_some() {
-            (self.expr(lhs, want), self.expr(rhs, want))
         } else if is_untyped(lhs) && !is_untyped(rhs) {
-            let rt = self.expr(rhs, None);
+            let rt = self.expr(rhs, want);
             (self.expr(lhs, Some(&rt.ty)), rt)
         } else {
-            let lt = self.expr(lhs, None);
+            let lt = self.expr(lhs, want);
             let rt = self.expr(rhs, Some(&lt.ty));
             (lt, rt)
         };
@@ -484,8 +485,11 @@ impl Checker {
         let mut elem = want_under.as_ref().and_then(Type::elem).cloned();
         // An untyped table takes a named array type from context: `v := [1.0, 0.0, 0.0]`.
         let untyped = !items.is_empty() && items.iter().all(is_untyped);
-        let mut values = Some(Vec::with_capacity(items.len()));
-        for item in items {
+        // Typed items first, so that `[2, 4(int)]` is a table of `int`.
+        let typed = items.iter().enumerate().filter(|(_, i)| !is_untyped(i));
+        let untyped_items = items.iter().enumerate().filter(|(_, i)| is_untyped(i));
+        let mut found: Vec<Option<Value>> = vec![None; items.len()];
+        for (k, item) in typed.chain(untyped_items) {
             let t = self.table_item(item, elem.as_ref());
             match &elem {
                 Some(e) => {
@@ -493,11 +497,11 @@ impl Checker {
                 }
                 None => elem = Some(t.ty.clone()),
             }
-            match (&mut values, t.value) {
-                (Some(vs), Some(v)) => vs.push(v),
-                _ => values = None,
+            if let Some(slot) = found.get_mut(k) {
+                *slot = t.value;
             }
         }
+        let values: Option<Vec<Value>> = found.into_iter().collect();
         let n = u32::try_from(items.len()).ok();
         let _ = span;
         let ty = Type::array(n, elem.unwrap_or(Type::Error));

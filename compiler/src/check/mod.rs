@@ -68,6 +68,8 @@ pub(crate) struct Checker {
     dynamic_sizes: bool,
     /// Above zero while folding a FUNCTION call: expression tables are not written.
     shadow: u32,
+    /// Constants found while folding (the shadow of `out.constants`).
+    shadow_constants: std::collections::HashMap<Span, crate::consteval::Value>,
     /// The `IS` bodies of FUNCTIONs with one result, for folding calls with constant actuals.
     fn_bodies: std::collections::HashMap<crate::checked::ProcId, (Vec<ast::Name>, ast::Expr)>,
     /// Abbreviations declared before this symbol are ignored by the alias check (see calls).
@@ -147,6 +149,7 @@ impl Checker {
             dynamic_sizes: false,
             param_names: Vec::new(),
             shadow: 0,
+            shadow_constants: std::collections::HashMap::new(),
             fn_bodies: std::collections::HashMap::new(),
             tables: Vec::new(),
             repl_values: std::collections::HashMap::new(),

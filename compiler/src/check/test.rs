@@ -68,7 +68,7 @@ accepts!(untyped_literal_takes_context, "PROC p ()\n  INT16 s:\n  INT64 l:\n  RE
 accepts!(untyped_literals_in_expressions, "PROC p ()\n  INT16 s:\n  REAL64 r:\n  SEQ\n    s := s + 1\n    r := (r * 2.0) + 1.5\n:");
 accepts!(typed_literals, "PROC p ()\n  INT64 l:\n  l := 5(INT64) + #FF(INT64)\n:");
 accepts!(char_literal_takes_context, "PROC p ()\n  INT x:\n  x := 'a'\n:");
-rejects!(char_literal_alone_is_byte, "PROC p ()\n  INT x:\n  BYTE b:\n  x := INT ('a' + b)\n  x := b + 'a'\n:", 5, "expected INT, found BYTE");
+rejects!(char_literal_alone_is_byte, "PROC p ()\n  INT x:\n  BYTE b:\n  SEQ\n    x := INT ('a' + b)\n    x := b + 'a'\n:", 6, "expected INT, found BYTE");
 accepts!(record_literal_untyped, "DATA TYPE R\n  RECORD\n    INT i:\n    BYTE b:\n:\nPROC p ()\n  R r:\n  r := [1, 'a']\n:");
 accepts!(char_literal_decorated, "PROC p ()\n  INT x:\n  x := 'a'(INT)\n:");
 rejects!(bad_operand_bool_plus, "PROC p ()\n  BOOL b:\n  b := TRUE + FALSE\n:", 3, "operator + cannot be applied to BOOL");
@@ -159,6 +159,14 @@ accepts!(alt_guards, "PROC p (CHAN OF INT a, b)\n  TIMER t:\n  INT x, now:\n  SE
 accepts!(replicated_alt, "PROC p ([4]CHAN OF INT c)\n  INT x:\n  ALT i = 0 FOR 4\n    c[i] ? x\n      SKIP\n:");
 rejects!(retypes_size, "PROC p ()\n  INT x:\n  [2]BYTE b RETYPES x:\n  SKIP\n:", 3, "RETYPES size mismatch");
 accepts!(retypes_ok, "PROC p ()\n  INT x:\n  [4]BYTE b RETYPES x:\n  VAL INT32 y RETYPES 1.0(REAL32):\n  b[0] := 1\n:");
+
+accepts!(table_typed_by_its_typed_item, "DATA TYPE int IS INT:\nVAL a IS [2, 4(int)]:\nVAL b IS [2(int), 4]:\nPROC p ()\n  [2]int c:\n  c := a\n:");
+accepts!(function_call_folded, "INT FUNCTION sum (VAL INT x, y) IS x + y:\nINT FUNCTION inc (VAL INT x) IS sum (x, 1):\nPROC p ()\n  [inc (sum (1, 2))]INT a:\n  a[3] := 0\n:");
+accepts!(reshapes_with_variable_sizes, "PROC p (VAL INT x, y, []BYTE buf)\n  [x][y]BYTE bb RESHAPES buf:\n  bb[0][0] := 1\n:");
+accepts!(call_alias_only_after_proc, "PROC p ()\n  [10]INT x:\n  INT y IS x[9]:\n  PROC q ()\n    y := 1\n  :\n  q ()\n:");
+accepts!(same_variable_subscript_disjoint, "PROC p ()\n  [3][3]INT c:\n  INT b:\n  SEQ\n    b := 2\n    d IS c[b][0]:\n    e IS c[b][1]:\n    d, e := 1, 2\n:");
+accepts!(channel_table_abbreviation, "PROC p ()\n  CHAN OF INT c0, c1:\n  INT x:\n  PAR\n    c1 ! 1\n    d IS [c0, c1]:\n    ALT i = 0 FOR 2\n      d[i] ? x\n        SKIP\n:");
+accepts!(two_dimensional_par, "PROC p ()\n  [4][2]INT res:\n  SEQ i = 0 FOR 4\n    PAR k = 0 FOR 2\n      res[i][k] := k\n:");
 
 #[test]
 fn every_error_is_reported_not_just_the_first() {
