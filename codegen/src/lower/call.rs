@@ -148,10 +148,19 @@ impl Tr<'_, '_> {
                     return self.predefined_function(p.name, args, span);
                 }
                 // A conversion to a named type written `T (x)`.
-                if let SymbolKind::DataType(_) = &self.cx.checked.symbols[sym].kind
+                if let SymbolKind::DataType(id) = &self.cx.checked.symbols[sym].kind
                     && args.len() == 1
                 {
-                    return Ok(vec![self.expr(&args[0])?]);
+                    let to = self
+                        .cx
+                        .checked
+                        .types
+                        .prim(&Type::Named(*id))
+                        .ok_or_else(|| self.cx.unsupported(span, "conversion to a record"))?;
+                    let from = self.prim_of(&args[0])?;
+                    let v = self.expr(&args[0])?;
+                    let mode = occ_grammar::ast::ConvMode::Plain;
+                    return Ok(vec![self.convert(v, from, to, mode, span)?]);
                 }
                 return Err(self
                     .cx

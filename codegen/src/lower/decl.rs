@@ -56,18 +56,15 @@ impl Tr<'_, '_> {
                     dims: Vec::new(),
                 };
                 let sd = crate::layout::static_dims(&ty);
-                let mut inner = 1i64;
-                for d in sd.iter().skip(1) {
-                    inner *= i64::from(d.unwrap_or(1));
-                }
+                // An open dimension takes what is left of the source's size.
+                let known: i64 = sd.iter().map(|d| i64::from(d.unwrap_or(1))).product();
                 let esz = size_of(&self.cx.checked.types, crate::layout::base_elem(&ty))
                     .unwrap_or(1)
-                    * inner;
-                for (i, d) in sd.iter().enumerate() {
+                    * known.max(1);
+                for d in &sd {
                     let v = match d {
                         Some(n) => self.iconst(i64::from(*n)),
-                        None if i == 0 => self.b.ins().udiv_imm_s(size, esz.max(1)),
-                        None => self.iconst(0),
+                        None => self.b.ins().udiv_imm_s(size, esz.max(1)),
                     };
                     l.dims.push(v);
                 }

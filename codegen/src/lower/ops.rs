@@ -139,7 +139,8 @@ impl Tr<'_, '_> {
                 BinOp::Div => ins.fdiv(a, b),
                 BinOp::Rem => {
                     let q = ins.fdiv(a, b);
-                    let q = self.b.ins().trunc(q);
+                    // IEEE remainder: the quotient rounded to nearest (ties to even).
+                    let q = self.b.ins().nearest(q);
                     let m = self.b.ins().fmul(q, b);
                     self.b.ins().fsub(a, m)
                 }

@@ -306,7 +306,8 @@ impl Tr<'_, '_> {
         };
         for (l, (v, ty)) in lhs.iter().zip(vals) {
             let dst = self.place(l)?;
-            if is_scalar(&self.cx.checked.types, &dst.ty) {
+            if let Some(p) = self.cx.checked.types.prim(&dst.ty) {
+                let v = self.coerce(v, crate::layout::cl_type(p));
                 self.store_scalar(v, dst.addr);
             } else {
                 let size = self.loc_size(&dst, span)?;
