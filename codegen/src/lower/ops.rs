@@ -261,13 +261,31 @@ impl Tr<'_, '_> {
             } else {
                 self.b.ins().fcvt_from_sint(tt, v)
             }),
-            (true, true) => Ok(if tt.bits() > ft.bits() {
-                self.b.ins().fpromote(tt, v)
-            } else {
-                self.b.ins().fdemote(tt, v)
-            }),
+            (true, true) if tt.bits() > ft.bits() => Ok(self.b.ins().fpromote(tt, v)),
+            (true, true) if mode == ConvMode::Trunc => Ok(self.demote_trunc(v)),
+            (true, true) => Ok(self.b.ins().fdemote(tt, v)),
             (true, false) => Ok(self.real_to_int(v, from, to, mode, span)),
         }
+    }
+
+    /// REAL64 to REAL32 rounding toward zero: demote to nearest, then step one unit toward zero
+    /// if that rounded away from zero.
+    fn demote_trunc(&mut self, v: Value) -> Value {
+        let r = self.b.ins().fdemote(types::F32, v);
+        let back = self.b.ins().fpromote(types::F64, r);
+        let ab = self.b.ins().fabs(back);
+        let av = self.b.ins().fabs(v);
+        let away = self.b.ins().fcmp(FloatCC::GreaterThan, ab, av);
+        let bits = self
+            .b
+            .ins()
+            .bitcast(types::I32, cranelift_codegen::ir::MemFlagsData::new(), r);
+        let bits = self.b.ins().iadd_imm_s(bits, -1);
+        let r2 = self
+            .b
+            .ins()
+            .bitcast(types::F32, cranelift_codegen::ir::MemFlagsData::new(), bits);
+        self.b.ins().select(away, r2, r)
     }
 
     fn int_convert(&mut self, v: Value, from: Prim, to: Prim, span: Span) -> Value {

@@ -95,6 +95,29 @@ impl Tr<'_, '_> {
                 let lo = self.b.ins().ireduce(types::I32, p);
                 Ok(vec![hi, lo])
             }
+            ("REAL32OP" | "REAL64OP", [x, op, y]) => {
+                let (x, op, y) = (*x, *op, *y);
+                let a = self.b.ins().fadd(x, y);
+                let s = self.b.ins().fsub(x, y);
+                let m = self.b.ins().fmul(x, y);
+                let d = self.b.ins().fdiv(x, y);
+                let mut r = d;
+                for (k, v) in [(2, m), (1, s), (0, a)] {
+                    let is = self.b.ins().icmp_imm_s(
+                        cranelift_codegen::ir::condcodes::IntCC::Equal,
+                        op,
+                        k,
+                    );
+                    r = self.b.ins().select(is, v, r);
+                }
+                one(r)
+            }
+            ("REAL32REM" | "REAL64REM" | "DREM", [x, y]) => {
+                let q = self.b.ins().fdiv(*x, *y);
+                let q = self.b.ins().nearest(q);
+                let m = self.b.ins().fmul(q, *y);
+                one(self.b.ins().fsub(*x, m))
+            }
             ("LONGDIV", [hi, lo, d]) => {
                 let (hi, lo, d) = (*hi, *lo, *d);
                 let ok = self.b.ins().icmp(
