@@ -56,10 +56,10 @@ pub fn chain(diags: &mut Vec<Diagnostic>, first: Expr, rest: Vec<((BinOp, Span),
     let mut lhs = first;
     let mut previous: Option<BinOp> = None;
     for ((op, op_span), rhs) in rest {
-        if let Some(prev) = previous {
-            if prev != op || !associative(op) {
-                diags.push(parenthesis_error(prev, op, op_span));
-            }
+        if let Some(prev) = previous
+            && (prev != op || !associative(op))
+        {
+            diags.push(parenthesis_error(prev, op, op_span));
         }
         previous = Some(op);
         let span = lhs.span.to(rhs.span);

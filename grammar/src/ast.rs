@@ -788,6 +788,10 @@ pub struct Choice {
 
 /// A guarded choice or a nested IF.
 #[derive(Debug, Clone, PartialEq)]
+#[allow(
+    clippy::large_enum_variant,
+    reason = "the guarded form is by far the common one; boxing it would change a shape other crates match on"
+)]
 pub enum ChoiceKind {
     /// `cond` then an indented process.
     Guarded {

@@ -115,7 +115,8 @@ impl Printer {
     fn line(&mut self, text: &str) {
         let indent = "  ".repeat(self.depth);
         self.out.push_str(&indent);
-        self.out.push_str(&text.replace(BREAK, &format!("\n{indent}  ")));
+        self.out
+            .push_str(&text.replace(BREAK, &format!("\n{indent}  ")));
         self.out.push('\n');
     }
 

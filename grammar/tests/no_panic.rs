@@ -18,10 +18,59 @@ fn front(text: &str) {
 }
 
 const PIECES: &[&str] = &[
-    "SEQ", "PAR", "IF", "ALT", "CASE", "WHILE", "PROC", "FUNCTION", "VALOF", "RESULT", "INT", "x",
-    "c", ":=", "!", "?", ";", ":", "::", ",", "(", ")", "[", "]", "+", "-", "AND", "FROM", "FOR",
-    "IS", "VAL", "\n", "\n  ", "\n    ", "  ", "\t", "\"s*", "'", "#FF", "1.5", "#IF", "#INCLUDE \"inc.inc\"",
-    "#ENDIF", "#ELSE", "#DEFINE X", "DEFINED (X)", "ASM", "*", "--", "(VALOF", "[x]", "|", "=",
+    "SEQ",
+    "PAR",
+    "IF",
+    "ALT",
+    "CASE",
+    "WHILE",
+    "PROC",
+    "FUNCTION",
+    "VALOF",
+    "RESULT",
+    "INT",
+    "x",
+    "c",
+    ":=",
+    "!",
+    "?",
+    ";",
+    ":",
+    "::",
+    ",",
+    "(",
+    ")",
+    "[",
+    "]",
+    "+",
+    "-",
+    "AND",
+    "FROM",
+    "FOR",
+    "IS",
+    "VAL",
+    "\n",
+    "\n  ",
+    "\n    ",
+    "  ",
+    "\t",
+    "\"s*",
+    "'",
+    "#FF",
+    "1.5",
+    "#IF",
+    "#INCLUDE \"inc.inc\"",
+    "#ENDIF",
+    "#ELSE",
+    "#DEFINE X",
+    "DEFINED (X)",
+    "ASM",
+    "*",
+    "--",
+    "(VALOF",
+    "[x]",
+    "|",
+    "=",
 ];
 
 proptest! {
@@ -63,7 +112,9 @@ fn corpus() -> &'static Vec<String> {
         let mut texts = Vec::new();
         let mut stack = vec![root];
         while let Some(dir) = stack.pop() {
-            let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+            let Ok(entries) = std::fs::read_dir(&dir) else {
+                continue;
+            };
             for entry in entries.flatten() {
                 let path = entry.path();
                 if path.is_dir() {
@@ -83,12 +134,21 @@ fn recursive_include_is_an_error_not_a_hang() {
     let mut files: HashMap<String, String> = HashMap::new();
     files.insert("self.inc".into(), "#INCLUDE \"self.inc\"\n".into());
     let parsed = occ_grammar::parse_source("root.occ", "#INCLUDE \"self.inc\"\n", &mut files);
-    assert!(parsed.diagnostics.iter().any(|d| d.message.contains("nested too deeply")));
+    assert!(
+        parsed
+            .diagnostics
+            .iter()
+            .any(|d| d.message.contains("nested too deeply"))
+    );
 }
 
 #[test]
 fn deeply_nested_parentheses_do_not_overflow() {
     let depth = 2000;
-    let text = format!("PROC p ()\n  x := {}1{}\n:\n", "(".repeat(depth), ")".repeat(depth));
+    let text = format!(
+        "PROC p ()\n  x := {}1{}\n:\n",
+        "(".repeat(depth),
+        ")".repeat(depth)
+    );
     front(&text);
 }

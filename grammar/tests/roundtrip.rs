@@ -36,7 +36,8 @@ fn expr() -> impl Strategy<Value = String> {
             inner.clone().prop_map(|a| format!("NOT ({a})")),
             inner.clone().prop_map(|a| format!("INT ROUND ({a})")),
             (name(), inner.clone()).prop_map(|(n, i)| format!("{n}[{i}]")),
-            (name(), inner.clone(), inner.clone()).prop_map(|(n, a, b)| format!("[{n} FROM {a} FOR {b}]")),
+            (name(), inner.clone(), inner.clone())
+                .prop_map(|(n, a, b)| format!("[{n} FROM {a} FOR {b}]")),
             (name(), inner.clone()).prop_map(|(n, a)| format!("f ({n}, {a})")),
             prop::collection::vec(inner.clone(), 1..4).prop_map(|v| format!("[{}]", v.join(", "))),
             inner.prop_map(|a| format!("SIZE ({a})")),
@@ -54,7 +55,12 @@ fn process() -> impl Strategy<Value = Vec<String>> {
         (name(), expr()).prop_map(|(n, e)| vec![format!("p ({n}, {e})")]),
     ];
     leaf.prop_recursive(3, 16, 3, |inner| {
-        let indent = |lines: Vec<String>| lines.into_iter().map(|l| format!("  {l}")).collect::<Vec<_>>();
+        let indent = |lines: Vec<String>| {
+            lines
+                .into_iter()
+                .map(|l| format!("  {l}"))
+                .collect::<Vec<_>>()
+        };
         prop_oneof![
             prop::collection::vec(inner.clone(), 1..3).prop_map(move |ps| {
                 let mut out = vec!["SEQ".to_string()];
@@ -110,7 +116,9 @@ fn corpus_files_round_trip() {
     collect(&root, &mut files);
     let mut checked = 0;
     for file in files {
-        let Ok(text) = std::fs::read_to_string(&file) else { continue };
+        let Ok(text) = std::fs::read_to_string(&file) else {
+            continue;
+        };
         if text.contains("#INCLUDE") || text.contains("#USE") {
             continue;
         }
@@ -125,7 +133,9 @@ fn corpus_files_round_trip() {
 }
 
 fn collect(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
     for entry in entries.flatten() {
         let path = entry.path();
         if path.is_dir() {

@@ -18,7 +18,10 @@ pub fn parse_ok(text: &str) -> occ_grammar::ast::Program {
         .iter()
         .map(|d| format!("{} ({})", d.message, d.label))
         .collect();
-    assert!(messages.is_empty(), "unexpected diagnostics for\n{text}\n{messages:#?}");
+    assert!(
+        messages.is_empty(),
+        "unexpected diagnostics for\n{text}\n{messages:#?}"
+    );
     parsed.program
 }
 
@@ -31,7 +34,15 @@ pub fn errors(text: &str) -> Vec<(usize, String)> {
         .filter(|d| d.severity == occ_grammar::diagnostic::Severity::Error)
         .map(|d| {
             let line = d.locate(&parsed.map).map_or(0, |l| l.line);
-            (line, format!("{} | {} | {}", d.message, d.label, d.help.clone().unwrap_or_default()))
+            (
+                line,
+                format!(
+                    "{} | {} | {}",
+                    d.message,
+                    d.label,
+                    d.help.clone().unwrap_or_default()
+                ),
+            )
         })
         .collect()
 }
@@ -55,8 +66,15 @@ pub fn spanless<T: std::fmt::Debug>(value: &T) -> String {
 pub fn assert_round_trip(program: &occ_grammar::ast::Program) {
     let printed = occ_grammar::print::program(program);
     let again = parse(&printed);
-    let messages: Vec<String> = again.diagnostics.iter().map(|d| d.message.clone()).collect();
-    assert!(messages.is_empty(), "printed text does not parse:\n{printed}\n{messages:#?}");
+    let messages: Vec<String> = again
+        .diagnostics
+        .iter()
+        .map(|d| d.message.clone())
+        .collect();
+    assert!(
+        messages.is_empty(),
+        "printed text does not parse:\n{printed}\n{messages:#?}"
+    );
     assert_eq!(
         spanless(&again.program.decls),
         spanless(&program.decls),
