@@ -223,7 +223,12 @@ impl Checker {
                 self.declare(name, SymbolKind::Abbrev { mode }, ty, true);
                 return;
             }
+            let constant = t.value.is_some();
             let id = self.declare(name, SymbolKind::Val { value: t.value }, ty, false);
+            if !constant && let Some(l) = self.linear(value) {
+                // `VAL ii IS i:` keeps subscripts through `ii` comparable with those through `i`.
+                self.val_lin.insert(id, l);
+            }
             if let Some(target) = t.target {
                 self.abbreviated.push(super::Abbreviated {
                     target,

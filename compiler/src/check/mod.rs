@@ -68,6 +68,11 @@ pub(crate) struct Checker {
     dynamic_sizes: bool,
     /// Above zero while folding a FUNCTION call: expression tables are not written.
     shadow: u32,
+    /// Linear forms of VAL abbreviations of subscript-like expressions (`VAL ii IS i:`).
+    val_lin: std::collections::HashMap<SymbolId, crate::usage::Lin>,
+    /// `IF i = c` guards being checked, innermost last: accesses in them happen only in the
+    /// instance where the replicator `i` is `c`.
+    conditions: Vec<(SymbolId, i64)>,
     /// Constants found while folding (the shadow of `out.constants`).
     shadow_constants: std::collections::HashMap<Span, crate::consteval::Value>,
     /// The `IS` bodies of FUNCTIONs with one result, for folding calls with constant actuals.
@@ -149,6 +154,8 @@ impl Checker {
             dynamic_sizes: false,
             param_names: Vec::new(),
             shadow: 0,
+            conditions: Vec::new(),
+            val_lin: std::collections::HashMap::new(),
             shadow_constants: std::collections::HashMap::new(),
             fn_bodies: std::collections::HashMap::new(),
             tables: Vec::new(),
@@ -274,11 +281,13 @@ impl Checker {
         if self.quiet > 0 {
             return;
         }
+        let only = self.conditions.last().copied();
         let (access, hops) = self.resolve_alias(Access {
             symbol,
             mode,
             part,
             span,
+            only,
         });
         self.check_alias(access, &hops);
         if let Some(frame) = self.frames.last_mut() {
@@ -357,6 +366,9 @@ impl Checker {
             return;
         };
         for a in frame.iter_mut().skip(mark) {
+            if a.only.is_some_and(|(v, _)| v == index) {
+                a.only = None;
+            }
             a.part = crate::usage::hull(&self.tables, a.part, index, values.map(Vec::as_slice));
         }
     }

@@ -15,7 +15,7 @@ use crate::usage::{Access, Lin, Mode, Part, TO_END};
 /// The part of a symbol that is all of it.
 pub(super) const ENTIRE: Part = Part::Range {
     start: Lin {
-        terms: [None, None],
+        terms: [None; crate::usage::TERMS],
         b: 0,
     },
     len: TO_END,
@@ -101,6 +101,7 @@ impl Checker {
                     mode: Mode::Read,
                     part: ENTIRE,
                     span: name.span,
+                    only: None,
                 });
                 Placed {
                     ty,
@@ -121,6 +122,7 @@ impl Checker {
                     mode: mode.unwrap_or(Mode::Read),
                     part: ENTIRE,
                     span: name.span,
+                    only: None,
                 };
                 if let Some(m) = mode {
                     self.record(id, m, ENTIRE, name.span);
@@ -330,6 +332,9 @@ impl Checker {
                 let id = *self.out.names.get(&n.span)?;
                 // Replicator indices, and integer names whose value cannot change where the
                 // comparison is made (PAR branches may not write a name another one uses).
+                if let Some(l) = self.val_lin.get(&id) {
+                    return Some(*l);
+                }
                 let sym = self.sym(id);
                 let named = match &sym.kind {
                     SymbolKind::Replicator => true,

@@ -163,7 +163,14 @@ impl Checker {
             match &c.kind {
                 ast::ChoiceKind::Guarded { cond, body } => {
                     self.condition(cond, &Type::BOOL);
+                    let instance = self.instance_guard(cond);
+                    if let Some(g) = instance {
+                        self.conditions.push(g);
+                    }
                     self.process(body);
+                    if instance.is_some() {
+                        self.conditions.pop();
+                    }
                 }
                 ast::ChoiceKind::Nested(p) => self.process(p),
             }
@@ -173,6 +180,33 @@ impl Checker {
             self.hull_since(frame, r.id);
         }
         self.close_scope(mark);
+    }
+
+    /// Recognises a guard `i = c` (or `c = i`) on a replicator index `i` with known values: the
+    /// guarded process runs only in the instance where `i` is `c`.
+    fn instance_guard(&self, cond: &Expr) -> Option<(crate::checked::SymbolId, i64)> {
+        let ExprKind::Binary {
+            op: ast::BinOp::Eq,
+            lhs,
+            rhs,
+        } = &cond.kind
+        else {
+            return None;
+        };
+        let side = |name: &Expr, value: &Expr| {
+            let ExprKind::Name(n) = &name.kind else {
+                return None;
+            };
+            let id = *self.out.names.get(&n.span)?;
+            let known = self.repl_values.contains_key(&id);
+            let c = self
+                .out
+                .constants
+                .get(&value.span)
+                .and_then(Value::as_int)?;
+            known.then_some((id, c))
+        };
+        side(lhs, rhs).or_else(|| side(rhs, lhs))
     }
 
     fn alt(&mut self, alt: &ast::Alt) {

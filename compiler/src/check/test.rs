@@ -168,6 +168,10 @@ accepts!(same_variable_subscript_disjoint, "PROC p ()\n  [3][3]INT c:\n  INT b:\
 accepts!(channel_table_abbreviation, "PROC p ()\n  CHAN OF INT c0, c1:\n  INT x:\n  PAR\n    c1 ! 1\n    d IS [c0, c1]:\n    ALT i = 0 FOR 2\n      d[i] ? x\n        SKIP\n:");
 accepts!(two_dimensional_par, "PROC p ()\n  [4][2]INT res:\n  SEQ i = 0 FOR 4\n    PAR k = 0 FOR 2\n      res[i][k] := k\n:");
 
+accepts!(instance_guard_in_replicated_par, "PROC p ()\n  BOOL b:\n  PAR i = 0 FOR 4\n    IF\n      i = 2\n        b := TRUE\n      TRUE\n        SKIP\n:");
+rejects!(instance_guards_twice, "PROC p ()\n  BOOL b:\n  PAR i = 0 FOR 4\n    SEQ\n      IF\n        i = 2\n          b := TRUE\n        TRUE\n          SKIP\n      IF\n        i = 3\n          b := FALSE\n        TRUE\n          SKIP\n:", 7, "`b` is written");
+accepts!(val_abbreviation_of_index, "PROC p ()\n  [4][3][2]INT a:\n  PAR i = 0 FOR 4\n    VAL ii IS i:\n    SEQ j = 0 FOR 3\n      SEQ k = 0 FOR 2\n        a[ii][j][k] := (i + j) + k\n:");
+
 #[test]
 fn every_error_is_reported_not_just_the_first() {
     let d =

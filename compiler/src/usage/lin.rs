@@ -1,13 +1,17 @@
-//! Linear subscript forms: `c1*x1 + c2*x2 + b` over at most two index names.
+//! Linear subscript forms: `c1*x1 + ... + b` over a few index names (enough for the
+//! subscripts of a three-dimensional array inside replicators).
 
 use crate::checked::SymbolId;
 
-/// A linear function of at most two names (replicator indices or integer variables), with
+/// The most names a linear form may mention.
+pub const TERMS: usize = 4;
+
+/// A linear function of at most [`TERMS`] names (replicator indices or integer variables), with
 /// terms kept sorted and non-zero, so that equal functions compare equal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Lin {
     /// The terms `(name, coefficient)`, sorted by name, `None` after the last.
-    pub terms: [Option<(SymbolId, i64)>; 2],
+    pub terms: [Option<(SymbolId, i64)>; TERMS],
     /// The constant term.
     pub b: i64,
 }
@@ -16,17 +20,16 @@ impl Lin {
     /// A constant.
     pub fn constant(b: i64) -> Lin {
         Lin {
-            terms: [None, None],
+            terms: [None; TERMS],
             b,
         }
     }
 
     /// The name itself.
     pub fn var(id: SymbolId) -> Lin {
-        Lin {
-            terms: [Some((id, 1)), None],
-            b: 0,
-        }
+        let mut terms = [None; TERMS];
+        terms[0] = Some((id, 1));
+        Lin { terms, b: 0 }
     }
 
     /// Returns the constant, when this has no terms.
@@ -79,7 +82,7 @@ impl Lin {
     }
 
     fn build(terms: &[(SymbolId, i64)], b: i64) -> Option<Lin> {
-        let mut t: Vec<(SymbolId, i64)> = Vec::with_capacity(2);
+        let mut t: Vec<(SymbolId, i64)> = Vec::with_capacity(TERMS);
         for &(v, c) in terms {
             match t.iter_mut().find(|(x, _)| *x == v) {
                 Some(e) => e.1 = e.1.checked_add(c)?,
@@ -88,13 +91,14 @@ impl Lin {
         }
         t.retain(|(_, c)| *c != 0);
         t.sort_by_key(|(v, _)| *v);
-        if t.len() > 2 {
+        if t.len() > TERMS {
             return None;
         }
-        Some(Lin {
-            terms: [t.first().copied(), t.get(1).copied()],
-            b,
-        })
+        let mut terms = [None; TERMS];
+        for (slot, term) in terms.iter_mut().zip(t) {
+            *slot = Some(term);
+        }
+        Some(Lin { terms, b })
     }
 
     /// Adds two functions (`None` when the result needs more than two names, or overflows).

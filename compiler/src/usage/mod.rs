@@ -17,7 +17,7 @@ mod lin;
 #[cfg(test)]
 mod test;
 
-pub use lin::Lin;
+pub use lin::{Lin, TERMS};
 
 use occ_grammar::ast::Span;
 
@@ -150,6 +150,9 @@ pub struct Access {
     pub part: Part,
     /// Where (for the diagnostic).
     pub span: Span,
+    /// Set when the access happens only in the instance of a replicated process where the
+    /// index has this value (inside `IF i = 3`, occ21 evaluates such guards per instance).
+    pub only: Option<(SymbolId, i64)>,
 }
 
 /// Reports whether two parts may overlap, with both evaluated in the same instance (so a name
@@ -212,6 +215,47 @@ pub fn may_overlap_across(
     }
 }
 
+/// Reports whether access `a` in one instance and `b` in another instance of a replicated PAR
+/// over `index` may touch the same storage, taking `IF index = c` restrictions into account.
+fn across_instances(
+    tables: &Tables,
+    a: &Access,
+    b: &Access,
+    index: SymbolId,
+    values: Option<&[i64]>,
+) -> bool {
+    let only = |x: &Access| x.only.filter(|(v, _)| *v == index).map(|(_, c)| c);
+    let (ca, cb) = (only(a), only(b));
+    if ca.is_none() && cb.is_none() {
+        return may_overlap_across(tables, a.part, b.part, index, values);
+    }
+    let Some(vals) = values else {
+        return match (ca, cb) {
+            (Some(x), Some(y)) => {
+                x != y
+                    && may_overlap(
+                        tables,
+                        subst(tables, a.part, index, x),
+                        subst(tables, b.part, index, y),
+                    )
+            }
+            _ => may_overlap_across(tables, a.part, b.part, index, values),
+        };
+    };
+    vals.iter().enumerate().any(|(k, &i)| {
+        vals.iter().enumerate().any(|(l, &j)| {
+            k != l
+                && ca.is_none_or(|x| x == i)
+                && cb.is_none_or(|y| y == j)
+                && may_overlap(
+                    tables,
+                    subst(tables, a.part, index, i),
+                    subst(tables, b.part, index, j),
+                )
+        })
+    })
+}
+
 /// A conflict found between two branches of a PAR.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Conflict {
@@ -249,9 +293,7 @@ pub fn conflicts(
             a.symbol == b.symbol
                 && modes_conflict(a.mode, b.mode)
                 && match across {
-                    Some((index, values)) => {
-                        may_overlap_across(tables, a.part, b.part, index, values)
-                    }
+                    Some((index, values)) => across_instances(tables, a, b, index, values),
                     None => may_overlap(tables, a.part, b.part),
                 }
         });
@@ -268,5 +310,5 @@ pub fn conflicts(
 /// Removes repeated accesses (same symbol, mode and part), keeping the first.
 pub fn dedup(accesses: &mut Vec<Access>) {
     let mut seen = std::collections::HashSet::new();
-    accesses.retain(|a| seen.insert((a.symbol, a.mode, a.part)));
+    accesses.retain(|a| seen.insert((a.symbol, a.mode, a.part, a.only)));
 }

@@ -11,6 +11,7 @@ fn acc(s: usize, mode: Mode, part: Part) -> Access {
         mode,
         part,
         span: Span::default(),
+        only: None,
     }
 }
 
