@@ -10,7 +10,7 @@
 //! Spans are unique per node in the preprocessed text, except that a name and the expression
 //! consisting of just that name share a span (and then describe the same thing).
 
-use std::collections::HashMap;
+pub use crate::fxhash::FxHashMap;
 
 use occ_grammar::ast::{AbbrevMode, ParamMode, Span};
 
@@ -112,9 +112,9 @@ pub struct CheckedProgram {
     /// Every PROC and FUNCTION.
     pub procs: PrimaryMap<ProcId, ProcInfo>,
     /// Name occurrences (by span) to symbols.
-    pub names: HashMap<Span, SymbolId>,
+    pub names: FxHashMap<Span, SymbolId>,
     /// Expression types, by expression span.
-    pub expr_types: HashMap<Span, Type>,
+    pub expr_types: FxHashMap<Span, Type>,
     /// Constant values, by expression span.
-    pub constants: HashMap<Span, Value>,
+    pub constants: FxHashMap<Span, Value>,
 }

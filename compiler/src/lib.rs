@@ -10,6 +10,7 @@ pub mod checked;
 pub mod consteval;
 pub mod diagnostic;
 pub mod entity;
+mod fxhash;
 pub mod predefined;
 pub mod types;
 pub mod usage;

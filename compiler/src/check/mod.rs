@@ -69,20 +69,20 @@ pub(crate) struct Checker {
     /// Above zero while folding a FUNCTION call: expression tables are not written.
     shadow: u32,
     /// Linear forms of VAL abbreviations of subscript-like expressions (`VAL ii IS i:`).
-    val_lin: std::collections::HashMap<SymbolId, crate::usage::Lin>,
+    val_lin: crate::fxhash::FxHashMap<SymbolId, crate::usage::Lin>,
     /// `IF i = c` guards being checked, innermost last: accesses in them happen only in the
     /// instance where the replicator `i` is `c`.
     conditions: Vec<(SymbolId, i64)>,
     /// Constants found while folding (the shadow of `out.constants`).
-    shadow_constants: std::collections::HashMap<Span, crate::consteval::Value>,
+    shadow_constants: crate::fxhash::FxHashMap<Span, crate::consteval::Value>,
     /// The `IS` bodies of FUNCTIONs with one result, for folding calls with constant actuals.
-    fn_bodies: std::collections::HashMap<crate::checked::ProcId, (Vec<ast::Name>, ast::Expr)>,
+    fn_bodies: crate::fxhash::FxHashMap<crate::checked::ProcId, (Vec<ast::Name>, ast::Expr)>,
     /// Abbreviations declared before this symbol are ignored by the alias check (see calls).
     alias_floor: Option<SymbolId>,
     /// Tables of non-linear subscripts evaluated per replicator value.
     tables: crate::usage::Tables,
     /// Index values of replicators with constant base, count and step (and a small count).
-    repl_values: std::collections::HashMap<SymbolId, Vec<i64>>,
+    repl_values: crate::fxhash::FxHashMap<SymbolId, Vec<i64>>,
 }
 
 /// Checks that a program can switch off, as occ21's `#OPTION` letters do.
@@ -155,11 +155,11 @@ impl Checker {
             param_names: Vec::new(),
             shadow: 0,
             conditions: Vec::new(),
-            val_lin: std::collections::HashMap::new(),
-            shadow_constants: std::collections::HashMap::new(),
-            fn_bodies: std::collections::HashMap::new(),
+            val_lin: Default::default(),
+            shadow_constants: Default::default(),
+            fn_bodies: Default::default(),
             tables: Vec::new(),
-            repl_values: std::collections::HashMap::new(),
+            repl_values: Default::default(),
         };
         for pragma in &program.pragmas {
             let set = match pragma.kind {

@@ -1,14 +1,12 @@
 //! Nested scopes: occam names scope from their declaration to the end of the process (or
 //! construct) the declaration precedes, and an inner declaration hides an outer one.
 
-use std::collections::HashMap;
-
 use crate::checked::SymbolId;
 
 /// The names in scope, innermost last.
 #[derive(Debug, Default)]
 pub struct Scope {
-    names: HashMap<String, Vec<SymbolId>>,
+    names: crate::fxhash::FxHashMap<String, Vec<SymbolId>>,
     declared: Vec<String>,
     marks: Vec<usize>,
 }

@@ -58,14 +58,13 @@ impl Lin {
 
     /// The same function without the term in `id`.
     pub fn without(self, id: SymbolId) -> Lin {
-        let rest: Vec<(SymbolId, i64)> = self
-            .terms
-            .iter()
-            .flatten()
-            .copied()
-            .filter(|(v, _)| *v != id)
-            .collect();
-        Lin::build(&rest, self.b).unwrap_or(Lin::constant(self.b))
+        // Removing a term keeps the others sorted: shift them down, no allocation.
+        let mut terms = [None; TERMS];
+        let kept = self.terms.iter().flatten().filter(|(v, _)| *v != id);
+        for (slot, term) in terms.iter_mut().zip(kept) {
+            *slot = Some(*term);
+        }
+        Lin { terms, b: self.b }
     }
 
     /// The function with `id` set to `v`.

@@ -192,6 +192,20 @@ pub fn may_overlap_across(
     if !mentions(p, index) && !mentions(q, index) {
         return may_overlap(tables, p, q);
     }
+    if let (Some(vals), Part::Range { start: s, len: n }, Part::Range { start: t, len: m }) =
+        (values, p, q)
+        && s.without(index).same_terms(t.without(index))
+    {
+        // Same function apart from the index: plain arithmetic per pair of instances.
+        let (cs, ct) = (s.coef(index), t.coef(index));
+        return vals.iter().enumerate().any(|(k, &i)| {
+            vals.iter().enumerate().any(|(l, &j)| {
+                let a = s.b.saturating_add(cs.saturating_mul(i));
+                let b = t.b.saturating_add(ct.saturating_mul(j));
+                k != l && ranges_overlap((a, n), (b, m))
+            })
+        });
+    }
     if let Some(vals) = values {
         return vals.iter().enumerate().any(|(k, &i)| {
             vals.iter().enumerate().any(|(l, &j)| {
