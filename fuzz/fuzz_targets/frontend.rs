@@ -18,5 +18,5 @@ fuzz_target!(|data: &[u8]| {
         let _ = diagnostic.locate(&parsed.map);
     }
     let _ = occ_grammar::print::program(&parsed.program);
-    // ---- checker: `let _ = occ_compiler::check(&parsed.program);` (added by `check`) ----
+    let _ = occ_compiler::check(&parsed.program);
 });
