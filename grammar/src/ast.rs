@@ -263,6 +263,8 @@ pub enum ExprKind {
     },
     /// A table `[a, b, c]`.
     Table(Vec<Expr>),
+    /// A parenthesised expression list `(a, b)`, as compared in `(a, b) = (c, d)`.
+    List(Vec<Expr>),
     /// A table decorated with a type, as a RECORD or array literal: `[3, 4](POINT)`.
     TypedTable {
         /// The elements (or fields, in order).

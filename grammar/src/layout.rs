@@ -110,7 +110,8 @@ impl<'a> Layout<'a> {
         if self.out.last().is_some_and(|(_, t, _)| continues(t)) {
             return None;
         }
-        if let Some(column) = self.block_after_paren(first) {
+        if let Some((paren, column)) = self.block_after_paren(first) {
+            self.out[paren].1 = Token::BlockOpen;
             self.blocks.push(Block {
                 depth: self.stack.len(),
                 indented: false,
@@ -154,17 +155,19 @@ impl<'a> Layout<'a> {
     }
 
     /// If the logical line starting at `first` has an unclosed `(` followed by a declaration or
-    /// `VALOF` (`(VALOF` or `(INT x :`), returns the column of that token: a block starts there.
-    fn block_after_paren(&self, first: usize) -> Option<usize> {
+    /// `VALOF` (`(VALOF` or `(INT x :`), returns the index of that `(` and the column of the token
+    /// after it: a block starts there.
+    fn block_after_paren(&self, first: usize) -> Option<(usize, usize)> {
         let mut depth = 0usize;
         for i in (first..self.out.len()).rev() {
             match self.out[i].1 {
                 Token::RParen => depth += 1,
+                Token::BlockOpen if depth > 0 => depth -= 1,
                 Token::LParen if depth > 0 => depth -= 1,
                 Token::LParen => {
                     let (at, token, _) = self.out.get(i + 1)?;
                     return opens_block(token)
-                        .then(|| column(&self.text[self.line_start_of(*at)..*at]));
+                        .then(|| (i, column(&self.text[self.line_start_of(*at)..*at])));
                 }
                 _ => {}
             }
@@ -178,6 +181,9 @@ impl<'a> Layout<'a> {
             other => other,
         };
         if std::mem::take(&mut self.after_paren) && opens_block(&token) {
+            if let Some(last) = self.out.last_mut() {
+                last.1 = Token::BlockOpen;
+            }
             self.blocks.push(Block {
                 depth: self.stack.len(),
                 indented: true,

@@ -25,7 +25,9 @@ impl LexError {
         match self {
             LexError::BadCharacter => "this character cannot appear in occam here",
             LexError::IntegerTooLarge => "this number does not fit in 64 bits",
-            LexError::BadEscape => "unknown escape: use *n *c *t *s *' *\" ** or *#hh",
+            LexError::BadEscape => {
+                "unknown escape: use *n *c *t *s *' *\" ** *#hh, or *l first in a string"
+            }
             LexError::BadCharLiteral => "a character literal holds exactly one character",
             LexError::UnclosedString => {
                 "this string is not closed: end it with \" or continue it with * and *"
@@ -58,6 +60,8 @@ pub enum Token<'a> {
     /// The `[` of a one-element table `[x]` (set by the layout pass: `[x]` alone would read as
     /// the start of an array type `[x]INT`).
     TableOpen,
+    /// The `(` of a VALOF expression over several lines (set by the layout pass).
+    BlockOpen,
     /// A name written before `FUNCTION` on the same line, hence a type (set by the layout pass).
     TypeName(&'a str),
     /// A decimal integer.
@@ -344,8 +348,13 @@ pub fn unescape(body: &str) -> Result<Vec<u8>, LexError> {
                 i += 2;
             }
             b' ' | b'\t' | b'\r' | b'\n' => i = skip_continuation(bytes, i - 1)?,
+            // `*l` first in a string stands for its length (the bytes after it).
+            b'l' | b'L' if i == 2 => out.push(0),
             _ => return Err(LexError::BadEscape),
         }
+    }
+    if body.starts_with("*l") || body.starts_with("*L") {
+        out[0] = u8::try_from(out.len() - 1).map_err(|_| LexError::BadEscape)?;
     }
     Ok(out)
 }

@@ -62,7 +62,7 @@ fn too_deep(tokens: &[crate::layout::Spanned<'_>]) -> Option<Diagnostic> {
     let (mut brackets, mut indents, mut monadic) = (0usize, 0usize, 0usize);
     for (l, token, r) in tokens {
         match token {
-            Token::LParen | Token::LBracket | Token::TableOpen => brackets += 1,
+            Token::LParen | Token::LBracket | Token::TableOpen | Token::BlockOpen => brackets += 1,
             Token::RParen | Token::RBracket => brackets = brackets.saturating_sub(1),
             Token::Indent => indents += 1,
             Token::Dedent => indents = indents.saturating_sub(1),
@@ -162,6 +162,7 @@ fn occam_term(terminal: &str) -> String {
         "STRLIT" => "a string".to_string(),
         "ASMBODY" => "an ASM body".to_string(),
         "TABLEOPEN" => "`[`".to_string(),
+        "BLOCKOPEN" => "`(`".to_string(),
         quoted => format!("`{}`", quoted.trim_matches('"').replace("\\\\", "\\")),
     }
 }

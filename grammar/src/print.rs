@@ -654,6 +654,9 @@ fn write_expr(s: &mut String, e: &Expr) {
         ExprKind::Table(items) => {
             let _ = write!(s, "[{}]", exprs_s(items));
         }
+        ExprKind::List(items) => {
+            let _ = write!(s, "({})", exprs_s(items));
+        }
         ExprKind::TypedTable { items, ty } => {
             let _ = write!(s, "[{}](", exprs_s(items));
             write_ty(s, ty);
