@@ -115,6 +115,20 @@ impl Checker {
                     target: p.target,
                 }
             }
+            ExprKind::List(items) => match items.as_slice() {
+                [single] => self.expr(single, want),
+                _ => {
+                    // Only meaningful as an operand of `=` / `<>` (handled in `binary`).
+                    for item in items {
+                        self.expr(item, None);
+                    }
+                    let kind = DiagnosticKind::Unsupported {
+                        what: "an expression list outside `=` or `<>`",
+                    };
+                    self.error(kind, e.span);
+                    Typed::of(Type::Error)
+                }
+            },
             ExprKind::TypedTable { items, ty } => {
                 let ty = self.ty(ty);
                 self.typed_table(items, ty, e.span)
@@ -338,6 +352,11 @@ impl Checker {
         want: Option<&Type>,
         span: ast::Span,
     ) -> Typed {
+        if let (ExprKind::List(ls), ExprKind::List(rs), BinOp::Eq | BinOp::Ne) =
+            (&lhs.kind, &rhs.kind, op)
+        {
+            return self.list_compare(op, ls, rs, span);
+        }
         let boolean = matches!(op, BinOp::And | BinOp::Or);
         let want = if boolean {
             Some(&Type::BOOL)
@@ -389,6 +408,29 @@ impl Checker {
             _ => None,
         };
         Typed::constant(result, value)
+    }
+
+    /// Checks `(a, b) = (c, d)`: item by item, equal when every item is.
+    fn list_compare(&mut self, op: BinOp, ls: &[Expr], rs: &[Expr], span: ast::Span) -> Typed {
+        if ls.len() != rs.len() {
+            self.error(
+                DiagnosticKind::ValueCount {
+                    expected: ls.len(),
+                    found: rs.len(),
+                },
+                span,
+            );
+        }
+        let mut all_equal = Some(true);
+        for (l, r) in ls.iter().zip(rs) {
+            let t = self.binary(BinOp::Eq, l, r, None, l.span.to(r.span));
+            all_equal = match (all_equal, t.value.as_ref().and_then(Value::as_bool)) {
+                (Some(acc), Some(eq)) => Some(acc && eq),
+                _ => None,
+            };
+        }
+        let value = all_equal.map(|eq| Value::Bool(if op == BinOp::Eq { eq } else { !eq }));
+        Typed::constant(Type::BOOL, value)
     }
 
     /// Checks `T e`, `T ROUND e`, `T TRUNC e` (and `T (e)` for a named type).
