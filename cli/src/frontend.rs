@@ -5,7 +5,14 @@
 //! - `check_file` never panics and never hangs on any input; every problem is a `Diag`.
 //! - `Diag::line` is the 1-based line in `Diag::file` (the file the problem is in, which may be an
 //!   included file), after mapping back through `#INCLUDE` re-indentation.
+//!
+//! Include search order: the including file's folder, then the `-I` folders, then `stdlib/`
+//! (from `OCC_STDLIB`, else the `stdlib/` folder of the workspace the executable was built in or
+//! sits in).
 
+use occ_grammar::ast::Span;
+use occ_grammar::diagnostic::{self as gd, Diagnostic};
+use occ_grammar::preprocess::Loader;
 use std::path::{Path, PathBuf};
 
 /// Options shared by `occ check`, `occ run` and `occ test`.
@@ -58,6 +65,125 @@ impl Checked {
 
 /// Checks the occam program rooted at `path`.
 pub fn check_file(path: &Path, options: &Options) -> Checked {
-    let _ = (path, options);
-    Checked::default()
+    let text = match std::fs::read(path) {
+        Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
+        Err(error) => return unreadable(path, &error),
+    };
+    let mut loader = FsLoader::new(options);
+    let parsed = occ_grammar::parse_source(&path.display().to_string(), &text, &mut loader);
+    let mut diagnostics: Vec<Diag> = parsed
+        .diagnostics
+        .iter()
+        .map(|d| to_diag(d, &parsed))
+        .collect();
+
+    // ---- The checker's diagnostics join here (filled in by the `check` helper). ----
+    // The checker runs only on a program that parsed: on a partial tree every dropped
+    // declaration would come back as a cascade of "not declared" errors.
+    if !parsed.has_errors() {
+        let check_options = occ_compiler::Options::from_source(&text);
+        let (_, found) = occ_compiler::check_with(&parsed.program, check_options);
+        diagnostics.extend(found.iter().map(|d| {
+            let severity = match d.severity {
+                occ_compiler::Severity::Error => Severity::Error,
+                occ_compiler::Severity::Warning => Severity::Warning,
+            };
+            located(&parsed, severity, d.span, d.message(), d.kind.label(), d.kind.help())
+        }));
+    }
+
+    diagnostics.sort_by(|a, b| (&a.file, a.line).cmp(&(&b.file, b.line)));
+    Checked { diagnostics }
+}
+
+/// Builds a `Diag` for a problem at `span` of the preprocessed text of `parsed`.
+pub fn located(
+    parsed: &occ_grammar::Parsed,
+    severity: Severity,
+    span: Span,
+    message: String,
+    label: String,
+    help: Option<String>,
+) -> Diag {
+    let mut diag = Diagnostic::error(span, message, label);
+    diag.help = help;
+    if severity == Severity::Warning {
+        diag = diag.warning();
+    }
+    to_diag(&diag, parsed)
+}
+
+fn to_diag(d: &Diagnostic, parsed: &occ_grammar::Parsed) -> Diag {
+    let location = d.locate(&parsed.map);
+    let (file, line) = location
+        .and_then(|l| Some((parsed.map.files.get(l.file)?.path.clone(), l.line)))
+        .unwrap_or_default();
+    Diag {
+        severity: match d.severity {
+            gd::Severity::Error => Severity::Error,
+            gd::Severity::Warning => Severity::Warning,
+        },
+        file: PathBuf::from(file),
+        line,
+        message: d.message.clone(),
+        report: d.to_report(&parsed.map),
+    }
+}
+
+fn unreadable(path: &Path, error: &std::io::Error) -> Checked {
+    let message = format!("cannot read {}: {error}", path.display());
+    Checked {
+        diagnostics: vec![Diag {
+            severity: Severity::Error,
+            file: path.to_path_buf(),
+            line: 0,
+            report: miette::miette!("{message}"),
+            message,
+        }],
+    }
+}
+
+/// Loads included files from the search path.
+struct FsLoader {
+    dirs: Vec<PathBuf>,
+}
+
+impl FsLoader {
+    fn new(options: &Options) -> Self {
+        let mut dirs = options.include_dirs.clone();
+        dirs.extend(stdlib_dir());
+        FsLoader { dirs }
+    }
+}
+
+impl Loader for FsLoader {
+    fn load(&mut self, name: &str, from: &str) -> Option<(String, String)> {
+        let here = Path::new(from).parent().map(Path::to_path_buf);
+        let found = here
+            .into_iter()
+            .chain(self.dirs.iter().cloned())
+            .map(|dir| dir.join(name))
+            .find(|candidate| candidate.is_file())?;
+        let bytes = std::fs::read(&found).ok()?;
+        let text = String::from_utf8_lossy(&bytes).into_owned();
+        Some((found.display().to_string(), text))
+    }
+}
+
+/// Finds `stdlib/`: `OCC_STDLIB`, else beside the executable's workspace, else the workspace the
+/// binary was built from.
+fn stdlib_dir() -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os("OCC_STDLIB") {
+        return Some(PathBuf::from(dir));
+    }
+    let exe = std::env::current_exe().ok();
+    let from_exe = exe
+        .iter()
+        .flat_map(|exe| exe.ancestors().skip(1))
+        .map(|dir| dir.join("stdlib"))
+        .find(|dir| dir.is_dir());
+    from_exe.or_else(|| {
+        let built = Path::new(env!("CARGO_MANIFEST_DIR")).join("../stdlib");
+        built.is_dir().then_some(built)
+    })
 }
