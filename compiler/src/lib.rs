@@ -1,5 +1,27 @@
 //! Semantic analysis of occam programs: name resolution, types, constant folding, usage and alias
 //! checks. Every error is a `miette` diagnostic with a span. No file or process IO happens here.
+//!
+//! Passes (one directory each, `mod.rs` + `test.rs`):
+//! - [`types`]: occam types and their T800 layout (`BYTESIN`, `OFFSETOF`);
+//! - [`consteval`]: constant folding with exact occam semantics (overflow is an error);
+//! - `check`: one walk in source order that resolves names, types every expression (untyped
+//!   literals take their type from context), folds constants, checks communications against
+//!   protocols and calls against parameters, and records every access for the usage rules;
+//! - [`usage`]: the PAR usage rules (occ21 style, per branch, subscripts compared exactly where
+//!   they are constant or the same linear function of replicator indices);
+//! - [`predefined`]: the signatures of the occam predefined routines.
+//!
+//! The result is a [`CheckedProgram`]: side tables over the AST for the code generator.
+//!
+//! # Example
+//!
+//! ```
+//! let source = "PROC p (CHAN OF INT c)\n  INT x, y:\n  PAR\n    c ? x\n    c ? y\n:\n";
+//! let parsed = occ_grammar::parse_source("p.occ", source, &mut std::collections::HashMap::new());
+//! let (checked, diagnostics) = occ_compiler::check(&parsed.program);
+//! assert!(checked.is_none());
+//! assert_eq!(diagnostics[0].message(), "`c` is used for input in more than one branch of this PAR");
+//! ```
 
 #![deny(missing_docs)]
 #![deny(unsafe_code)]
