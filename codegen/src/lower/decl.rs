@@ -74,8 +74,7 @@ impl Tr<'_, '_> {
             DeclKind::DataType { .. } | DeclKind::Protocol { .. } => Ok(()),
             DeclKind::Proc { .. } => {
                 let depth = self.depth + 1;
-                let e = self.cx.compile_proc(d, depth)?;
-                Ok(e)
+                self.cx.compile_proc(d, depth)
             }
             DeclKind::Function { name, .. } => {
                 let sym = self.cx.symbol(name)?;
