@@ -41,8 +41,18 @@ impl<'p> Compiler<'p> {
         let outer = std::mem::replace(&mut self.proc_name, name.text.clone());
         let r = self.function(&name.text, depth, frame, d.span, |tr| {
             tr.process(body)?;
-            let done = tr.iconst(0);
-            tr.ret(done);
+            // Word 1 is 0 for a called PROC; for a PROC started directly as a PAR branch it
+            // is the join block, and the PROC ends the branch.
+            let j = tr.b.ins().load(types::I64, mem(), tr.ws, 8);
+            let endp = tr.b.create_block();
+            let done = tr.b.create_block();
+            tr.b.ins().brif(j, endp, &[], done, &[]);
+            tr.b.switch_to_block(endp);
+            let st = tr.call_rt("rt_endp", &[tr.node, tr.ws, j]);
+            tr.ret(st);
+            tr.b.switch_to_block(done);
+            let zero = tr.iconst(0);
+            tr.ret(zero);
             Ok(())
         });
         self.proc_name = outer;
@@ -89,7 +99,23 @@ impl Tr<'_, '_> {
         };
         // Evaluate the actuals first (they may need temporaries), then place the callee's
         // workspace above everything allocated.
-        let mut stores: Vec<(i32, Vec<Value>)> = Vec::new();
+        let stores = self.eval_actuals(&entry, args)?;
+        let cw_off = self.frame.sub_workspace(entry.frame_words);
+        let cw = self.local_addr(cw_off);
+        self.store_actuals(&entry, cw, stores);
+        let zero = self.iconst(0);
+        self.b.ins().store(mem(), zero, cw, 8);
+        self.enter_frame(cw, entry.id);
+        self.call_native(entry.id, cw, span)
+    }
+
+    /// Evaluates the actuals of a call of `entry`: each parameter slot's words.
+    pub fn eval_actuals(
+        &mut self,
+        entry: &ProcEntry,
+        args: &[Expr],
+    ) -> Res<Vec<(i32, Vec<Value>)>> {
+        let mut stores = Vec::new();
         for (i, a) in args.iter().enumerate() {
             let (off, by_value) = entry.params[i];
             if by_value {
@@ -110,17 +136,22 @@ impl Tr<'_, '_> {
                 stores.push((off, vs));
             }
         }
-        let cw_off = self.frame.sub_workspace(entry.frame_words);
-        let cw = self.local_addr(cw_off);
+        Ok(stores)
+    }
+
+    /// Stores evaluated actuals and the static link into the callee frame `cw`.
+    pub fn store_actuals(&mut self, entry: &ProcEntry, cw: Value, stores: Vec<(i32, Vec<Value>)>) {
         for (off, vs) in stores {
             for (k, v) in vs.into_iter().enumerate() {
                 self.b.ins().store(mem(), v, cw, off + 8 * k as i32);
             }
         }
-        let link = self.frame_at(entry.depth - 1);
+        let link = if entry.depth <= 1 {
+            self.iconst(0)
+        } else {
+            self.frame_at(entry.depth - 1)
+        };
         self.b.ins().store(mem(), link, cw, 0);
-        self.enter_frame(cw, entry.id);
-        self.call_native(entry.id, cw, span)
     }
 
     /// Fills in a callee frame's header: CODE, IPTR = 0, CALLER = ws, ROOT = ws[ROOT].

@@ -6,13 +6,53 @@ use cranelift_module::FuncId;
 use occ_grammar::ast::{Process, Replicator, Span};
 use occ_runtime::abi::{join, priority};
 
-use super::{Res, Storage, Tr, mem};
+use occ_grammar::ast::{Expr, ExprKind, ProcessKind};
+
+use super::{ProcEntry, Res, Storage, Tr, mem};
 use crate::frame::{FIRST_LOCAL, Frame, HEADER_BYTES};
 
+/// A PAR branch: its own function, or a PROC started directly (the branch is one call).
+enum Branch<'a> {
+    Func(FuncId, u32),
+    Direct(ProcEntry, &'a [Expr]),
+}
+
 impl Tr<'_, '_> {
+    /// A branch that is exactly one call of a compiled PROC whose reference actuals are all
+    /// places: it runs as the PROC itself, saving a frame.
+    fn direct<'a>(&self, p: &'a Process) -> Option<(ProcEntry, &'a [Expr])> {
+        let ProcessKind::Call { name, args } = &p.kind else {
+            return None;
+        };
+        let sym = self.cx.symbol(name).ok()?;
+        let Some(Storage::Proc(e)) = self.cx.env.get(&sym) else {
+            return None;
+        };
+        let places = args.iter().zip(&e.params).all(|(a, (_, by_value))| {
+            *by_value
+                || matches!(
+                    a.kind,
+                    ExprKind::Name(_)
+                        | ExprKind::Subscript { .. }
+                        | ExprKind::Slice { .. }
+                        | ExprKind::Directed { .. }
+                )
+        });
+        (places && args.len() == e.params.len()).then(|| (e.clone(), args.as_slice()))
+    }
+
+    fn make_branch<'a>(&mut self, p: &'a Process, repl: Option<&Replicator>) -> Res<Branch<'a>> {
+        if let Some((e, args)) = self.direct(p) {
+            return Ok(Branch::Direct(e, args));
+        }
+        let (id, words) = self.branch(p, repl)?;
+        Ok(Branch::Func(id, words))
+    }
+
     /// Compiles one PAR branch as a function at depth `self.depth + 1`; with a replicator, the
     /// index is the branch's first local. Returns the function and its frame words.
     fn branch(&mut self, body: &Process, repl: Option<&Replicator>) -> Res<(FuncId, u32)> {
+        // The parent stores its own frame as the branch's static link (`prepare_func`).
         let depth = self.depth + 1;
         let mut frame = Frame::default();
         if let Some(r) = repl {
@@ -29,6 +69,24 @@ impl Tr<'_, '_> {
                 tr.ret(st);
                 Ok(())
             })
+    }
+
+    /// Stores a direct branch's actuals into its frame at byte offset `wptr` (actuals are
+    /// evaluated here, in the parent); returns the function to start.
+    fn prepare(&mut self, b: &Branch<'_>, wptr: i32) -> Res<FuncId> {
+        match b {
+            Branch::Func(id, _) => {
+                let child = self.local_addr(wptr);
+                self.b.ins().store(mem(), self.ws, child, 0);
+                Ok(*id)
+            }
+            Branch::Direct(e, args) => {
+                let stores = self.eval_actuals(e, args)?;
+                let child = self.local_addr(wptr);
+                self.store_actuals(e, child, stores);
+                Ok(e.id)
+            }
+        }
     }
 
     /// Sets up and starts the branch whose workspace is at `child`.
@@ -77,13 +135,18 @@ impl Tr<'_, '_> {
         self.b.ins().store(mem(), n, j, 8 * join::COUNT as i32);
         let mut branches = Vec::new();
         for p in body {
-            let (id, words) = self.branch(p, None)?;
+            let b = self.make_branch(p, None)?;
+            let words = match &b {
+                Branch::Func(_, w) => *w,
+                Branch::Direct(e, _) => e.frame_words,
+            };
             let at = self
                 .frame
                 .alloc(i64::from(HEADER_BYTES) + 8 * i64::from(words));
-            branches.push((id, at + HEADER_BYTES));
+            branches.push((b, at + HEADER_BYTES));
         }
-        for (i, (id, wptr)) in branches.into_iter().enumerate() {
+        for (i, (b, wptr)) in branches.into_iter().enumerate() {
+            let id = self.prepare(&b, wptr)?;
             let child = self.local_addr(wptr);
             self.start(child, id, join_off, pri && i == 0, span)?;
         }
@@ -109,7 +172,11 @@ impl Tr<'_, '_> {
                     .unsupported(span, "replicated PAR with a variable count"));
             }
         };
-        let (id, words) = self.branch(p, Some(r))?;
+        let br = self.make_branch(p, Some(r))?;
+        let words = match &br {
+            Branch::Func(_, w) => *w,
+            Branch::Direct(e, _) => e.frame_words,
+        };
         let stride = i64::from(HEADER_BYTES) + 8 * i64::from(words);
         let area = self.frame.alloc(stride * count.max(1));
         let (k_off, base_off, step_off) = (
@@ -117,6 +184,18 @@ impl Tr<'_, '_> {
             self.frame.alloc(8),
             self.frame.alloc(8),
         );
+        // A direct branch's actuals are evaluated here, with the index in the parent's frame.
+        let idx_off = self.frame.alloc(8);
+        if let Branch::Direct(..) = br {
+            let sym = self.cx.symbol(&r.name)?;
+            self.cx.env.insert(
+                sym,
+                Storage::Var {
+                    depth: self.depth,
+                    offset: idx_off,
+                },
+            );
+        }
         let base = self.expr(&r.base)?;
         let step = match &r.step {
             Some(s) => self.expr(s)?,
@@ -154,7 +233,20 @@ impl Tr<'_, '_> {
         let k32 = self.b.ins().ireduce(types::I32, k);
         let ks = self.b.ins().imul(k32, step);
         let idx = self.b.ins().iadd(base, ks);
-        self.b.ins().store(mem(), idx, child, FIRST_LOCAL);
+        let id = match &br {
+            Branch::Func(id, _) => {
+                self.b.ins().store(mem(), idx, child, FIRST_LOCAL);
+                self.b.ins().store(mem(), self.ws, child, 0);
+                *id
+            }
+            Branch::Direct(e, args) => {
+                let ia = self.local_addr(idx_off);
+                self.store_scalar(idx, ia);
+                let stores = self.eval_actuals(e, args)?;
+                self.store_actuals(e, child, stores);
+                e.id
+            }
+        };
         self.start(child, id, join_off, false, span)?;
         let ka = self.local_addr(k_off);
         let k = self.b.ins().load(types::I64, mem(), ka, 0);
