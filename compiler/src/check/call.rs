@@ -70,6 +70,9 @@ impl Checker {
         };
         if let Some(values) = repl.values(256) {
             self.repl_values.insert(id, values);
+        } else if let (Some(n), Some(s), Some(b)) = (count, step, self.linear(&r.base)) {
+            // `SEQ j = i * 10 FOR 5`: the values are `base + k*step`, base a linear form.
+            self.repl_forms.insert(id, (b, n, s));
         }
         repl
     }

@@ -365,7 +365,20 @@ impl Checker {
         } else {
             want
         };
-        let (lt, rt) = if consteval::is_shift(op) {
+        let (lt, rt) = if boolean {
+            let lt = self.expr(lhs, want);
+            // `FALSE AND e` and `TRUE OR e` never evaluate `e`.
+            let decided = lt.value.as_ref().and_then(Value::as_bool) == Some(op == BinOp::Or);
+            self.dead += u32::from(decided);
+            let rt = self.expr(rhs, want);
+            self.dead -= u32::from(decided);
+            if decided {
+                let value = lt.value.clone();
+                self.expect_type(&Type::BOOL, &rt.ty, rhs.span);
+                return Typed::constant(Type::BOOL, value);
+            }
+            (lt, rt)
+        } else if consteval::is_shift(op) {
             let lt = self.expr(lhs, want);
             let rt = self.expr(rhs, Some(&Type::INT));
             self.expect_type(&Type::INT, &rt.ty, rhs.span);

@@ -68,6 +68,11 @@ pub(crate) struct Checker {
     dynamic_sizes: bool,
     /// Above zero while folding a FUNCTION call: expression tables are not written.
     shadow: u32,
+    /// Replicators with a constant count and step whose base is a linear form (not a constant).
+    repl_forms: crate::fxhash::FxHashMap<SymbolId, (crate::usage::Lin, i64, i64)>,
+    /// Inside the right operand of `FALSE AND ...` / `TRUE OR ...`, which is never evaluated:
+    /// constant range errors there are not errors (occ21 folds the operator first).
+    dead: u32,
     /// Linear forms of VAL abbreviations of subscript-like expressions (`VAL ii IS i:`).
     val_lin: crate::fxhash::FxHashMap<SymbolId, crate::usage::Lin>,
     /// `IF i = c` guards being checked, innermost last: accesses in them happen only in the
@@ -154,6 +159,8 @@ impl Checker {
             dynamic_sizes: false,
             param_names: Vec::new(),
             shadow: 0,
+            repl_forms: Default::default(),
+            dead: 0,
             conditions: Vec::new(),
             val_lin: Default::default(),
             shadow_constants: Default::default(),
@@ -179,6 +186,13 @@ impl Checker {
 
     /// Reports an error.
     fn error(&mut self, kind: DiagnosticKind, span: Span) {
+        let range = matches!(
+            kind,
+            DiagnosticKind::OutOfBounds { .. } | DiagnosticKind::ConstantError { .. }
+        );
+        if self.dead > 0 && range {
+            return;
+        }
         self.diags.push(Diagnostic::error(kind, span));
     }
 
@@ -362,6 +376,7 @@ impl Checker {
     /// `mark` that depend on its index by the hull of what they touch over all its values.
     fn hull_since(&mut self, mark: usize, index: SymbolId) {
         let values = self.repl_values.get(&index);
+        let form = self.repl_forms.get(&index).copied();
         let Some(frame) = self.frames.last_mut() else {
             return;
         };
@@ -369,7 +384,12 @@ impl Checker {
             if a.only.is_some_and(|(v, _)| v == index) {
                 a.only = None;
             }
-            a.part = crate::usage::hull(&self.tables, a.part, index, values.map(Vec::as_slice));
+            a.part = match (values, form) {
+                (None, Some((base, count, step))) => {
+                    crate::usage::hull_symbolic(a.part, index, base, count, step)
+                }
+                _ => crate::usage::hull(&self.tables, a.part, index, values.map(Vec::as_slice)),
+            };
         }
     }
 

@@ -172,6 +172,11 @@ accepts!(instance_guard_in_replicated_par, "PROC p ()\n  BOOL b:\n  PAR i = 0 FO
 rejects!(instance_guards_twice, "PROC p ()\n  BOOL b:\n  PAR i = 0 FOR 4\n    SEQ\n      IF\n        i = 2\n          b := TRUE\n        TRUE\n          SKIP\n      IF\n        i = 3\n          b := FALSE\n        TRUE\n          SKIP\n:", 7, "`b` is written");
 accepts!(val_abbreviation_of_index, "PROC p ()\n  [4][3][2]INT a:\n  PAR i = 0 FOR 4\n    VAL ii IS i:\n    SEQ j = 0 FOR 3\n      SEQ k = 0 FOR 2\n        a[ii][j][k] := (i + j) + k\n:");
 
+accepts!(short_circuit_skips_range_errors, "PROC p ()\n  [1]BOOL a:\n  BOOL b:\n  SEQ\n    b := FALSE AND a[1]\n    b := TRUE OR a[1]\n:");
+rejects!(evaluated_operand_range_error, "PROC p ()\n  [1]BOOL a:\n  BOOL b:\n  b := TRUE AND a[1]\n:", 4, "out of range");
+accepts!(replicator_with_linear_base, "PROC p ()\n  [20]CHAN OF INT a:\n  PAR i = 0 FOR 2\n    SEQ j = i * 10 FOR 5\n      a[j] ! j\n:");
+rejects!(replicator_with_linear_base_overlap, "PROC p ()\n  [20]CHAN OF INT a:\n  PAR i = 0 FOR 2\n    SEQ j = i * 3 FOR 5\n      a[j] ! j\n:", 5, "used for output in more than one branch");
+
 #[test]
 fn every_error_is_reported_not_just_the_first() {
     let d =

@@ -104,6 +104,32 @@ fn mentions(p: Part, index: SymbolId) -> bool {
     }
 }
 
+/// Like [`hull`] for a replicator whose values are `base + k*step` for `k` in `0..count`, with
+/// `base` a linear form of other names (`SEQ j = i * 10 FOR 5`).
+pub fn hull_symbolic(p: Part, index: SymbolId, base: Lin, count: i64, step: i64) -> Part {
+    let Part::Range { start, len } = p else {
+        return if mentions(p, index) { Part::Whole } else { p };
+    };
+    let c = start.coef(index);
+    if c == 0 {
+        return p;
+    }
+    let spread = c
+        .saturating_mul(step)
+        .saturating_mul(count.saturating_sub(1).max(0));
+    let from = base.scale(c).and_then(|b| b.plus(start.without(index)));
+    match from {
+        Some(s) => Part::Range {
+            start: Lin {
+                b: s.b.saturating_add(spread.min(0)),
+                ..s
+            },
+            len: len.saturating_add(spread.abs()),
+        },
+        None => Part::Whole,
+    }
+}
+
 /// Replaces the dependence of a part on the replicator `index` by the hull of the elements it
 /// touches over `values` (or the whole symbol when the values are unknown): used when the
 /// replicator goes out of scope.
