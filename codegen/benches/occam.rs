@@ -67,7 +67,8 @@ fn startp(n: u64) -> String {
 
 fn ring(n: u64) -> String {
     format!(
-        "PROC main (CHAN BYTE keyboard?, screen!, error!)\n  [{n}]CHAN INT c:\n  PAR\n    PAR i = 0 FOR {n} - 1\n      INT t:\n      SEQ\n        c[i] ? t\n        c[i + 1] ! t + 1\n    INT t:\n    SEQ\n      c[0] ! 0\n      c[{n} - 1] ? t\n      ASSERT (t = ({n} - 1))\n:\n"
+        "PROC node (CHAN INT in?, out!)\n  INT t:\n  SEQ\n    in ? t\n    out ! t + 1\n:\n\
+PROC main (CHAN BYTE keyboard?, screen!, error!)\n  VAL INT N IS {n}:\n  [N + 1]CHAN INT ring:\n  #PRAGMA SHARED ring\n  PAR\n    ring[0] ! 0\n    PAR i = 0 FOR N\n      node (ring[i]?, ring[i + 1]!)\n    INT t:\n    SEQ\n      ring[N] ? t\n      ASSERT (t = N)\n:\n"
     )
 }
 

@@ -111,10 +111,18 @@ impl Tr<'_, '_> {
                 count: (size / 8) as u32,
                 name: n.text.clone(),
             });
-            let zero = self.iconst(0);
-            for i in 0..size / 8 {
-                let a = self.local_addr(off + (i * 8) as i32);
-                self.b.ins().store(mem(), zero, a, 0);
+            if size <= 64 {
+                let zero = self.iconst(0);
+                for i in 0..size / 8 {
+                    let a = self.local_addr(off + (i * 8) as i32);
+                    self.b.ins().store(mem(), zero, a, 0);
+                }
+            } else {
+                let a = self.local_addr(off);
+                let zero = self.b.ins().iconst(types::I8, 0);
+                let n = self.iconst(size);
+                let cfg = self.cx.jit.module_target_config();
+                self.b.call_memset(cfg, a, zero, n);
             }
         }
         self.bind(sym, off, false);
