@@ -134,6 +134,12 @@ impl Options {
 pub(crate) fn run(program: &ast::Program, options: Options) -> (CheckedProgram, Vec<Diagnostic>) {
     let mut c = Checker::new(program);
     c.options = options;
+    // Size the span tables from the text size once rather than rehashing as they grow
+    // (about one expression per 10 bytes of occam).
+    let bytes = program.decls.iter().map(|d| d.span.end).max().unwrap_or(0);
+    c.out.expr_types.reserve(bytes / 10);
+    c.out.names.reserve(bytes / 14);
+    c.out.constants.reserve(bytes / 40);
     c.scope.open();
     for decl in &program.decls {
         c.decl(decl);
