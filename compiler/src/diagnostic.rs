@@ -75,6 +75,12 @@ pub enum DiagnosticKind {
         /// The value, as written.
         value: String,
     },
+    /// Occurs when a FUNCTION or VALOF changes or communicates on something declared outside
+    /// it. Example: `INT FUNCTION f () ... VALOF total := 0 ...` with `total` a free variable.
+    SideEffect {
+        /// The variable or channel.
+        name: String,
+    },
     /// Occurs when a constant is required and the expression is not one. Example: `[n]INT a:` with a variable `n`.
     NotConstant {
         /// Where a constant was needed ("array size", "CASE option").
@@ -197,6 +203,9 @@ impl DiagnosticKind {
                 format!("conversion from {from} to {to} needs ROUND or TRUNC")
             }
             DuplicateOption { value } => format!("CASE option {value} appears more than once"),
+            SideEffect { name } => format!(
+                "`{name}` is declared outside this FUNCTION or VALOF, which may not change it or communicate on it"
+            ),
             NotConstant { context } => format!("{context} must be a constant"),
             NotAssignable { name } => format!("`{name}` cannot be assigned: it is a constant"),
             ArgumentCount {

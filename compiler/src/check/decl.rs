@@ -442,6 +442,9 @@ impl Checker {
             }
         }
         let usage = self.pop_frame();
+        if function.is_some() {
+            self.no_side_effects(&usage, first);
+        }
         self.open_procs.pop();
         self.close_scope(mark);
         let usage = summarise(usage, first, &params);

@@ -221,7 +221,12 @@ impl Checker {
             }
             ExprKind::Valof(v) => {
                 let wants: Vec<Type> = want.into_iter().cloned().collect();
+                let first = self.next_symbol();
+                self.push_frame();
                 let tys = self.valof_types(v, &wants);
+                let usage = self.pop_frame();
+                self.no_side_effects(&usage, first);
+                self.extend_frame(usage.into_iter().filter(|a| a.symbol < first));
                 if tys.len() != 1 {
                     self.error(
                         DiagnosticKind::ValueCount {

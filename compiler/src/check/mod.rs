@@ -399,6 +399,24 @@ impl Checker {
         }
     }
 
+    /// Reports changes to storage declared outside a FUNCTION body or VALOF (before symbol
+    /// `first`): occam expressions have no side effects. Timers are exempt.
+    fn no_side_effects(&mut self, usage: &[Access], first: SymbolId) {
+        let mut reported: Vec<SymbolId> = Vec::new();
+        for a in usage {
+            let outside = a.symbol < first && a.mode != Mode::Read;
+            if !outside
+                || reported.contains(&a.symbol)
+                || matches!(self.sym(a.symbol).ty, Type::Timer)
+            {
+                continue;
+            }
+            reported.push(a.symbol);
+            let name = self.sym(a.symbol).name.clone();
+            self.error(DiagnosticKind::SideEffect { name }, a.span);
+        }
+    }
+
     /// Adds accesses to the innermost frame.
     fn extend_frame(&mut self, accesses: impl IntoIterator<Item = Access>) {
         if let Some(frame) = self.frames.last_mut() {

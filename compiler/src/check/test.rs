@@ -177,6 +177,10 @@ rejects!(evaluated_operand_range_error, "PROC p ()\n  [1]BOOL a:\n  BOOL b:\n  b
 accepts!(replicator_with_linear_base, "PROC p ()\n  [20]CHAN OF INT a:\n  PAR i = 0 FOR 2\n    SEQ j = i * 10 FOR 5\n      a[j] ! j\n:");
 rejects!(replicator_with_linear_base_overlap, "PROC p ()\n  [20]CHAN OF INT a:\n  PAR i = 0 FOR 2\n    SEQ j = i * 3 FOR 5\n      a[j] ! j\n:", 5, "used for output in more than one branch");
 
+rejects!(function_changes_free_variable, "INT total:\nINT FUNCTION f (VAL INT x)\n  VALOF\n    total := x\n    RESULT x\n:", 4, "may not change it");
+rejects!(function_communicates, "PROC p (CHAN OF INT c)\n  INT FUNCTION f (VAL INT x)\n    INT y:\n    VALOF\n      c ? y\n      RESULT y\n  :\n  SKIP\n:", 5, "`c` is declared outside");
+accepts!(function_changes_its_locals, "INT FUNCTION f (VAL INT x)\n  INT y:\n  VALOF\n    SEQ\n      y := x\n      SEQ i = 0 FOR 3\n        y := y + i\n    RESULT y\n:");
+
 #[test]
 fn every_error_is_reported_not_just_the_first() {
     let d =
