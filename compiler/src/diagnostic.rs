@@ -298,6 +298,8 @@ pub struct Diagnostic {
     pub related: Option<(Span, String)>,
     /// Error or warning.
     pub severity: Severity,
+    /// A label for `span` more specific than the kind's (see [`DiagnosticKind::label`]).
+    pub label: Option<String>,
 }
 
 impl Diagnostic {
@@ -308,7 +310,19 @@ impl Diagnostic {
             span,
             related: None,
             severity: Severity::Error,
+            label: None,
         }
+    }
+
+    /// Replaces the label under the main span.
+    pub fn with_label(mut self, label: impl Into<String>) -> Self {
+        self.label = Some(label.into());
+        self
+    }
+
+    /// Returns the label under the main span.
+    pub fn label(&self) -> String {
+        self.label.clone().unwrap_or_else(|| self.kind.label())
     }
 
     /// Adds a related span with its label.
@@ -346,10 +360,8 @@ impl miette::Diagnostic for Diagnostic {
     }
 
     fn labels(&self) -> Option<Box<dyn Iterator<Item = LabeledSpan> + '_>> {
-        let main = LabeledSpan::new_primary_with_span(
-            Some(self.kind.label()),
-            SourceSpan::from(self.span),
-        );
+        let main =
+            LabeledSpan::new_primary_with_span(Some(self.label()), SourceSpan::from(self.span));
         let related = self.related.iter().map(|(span, label)| {
             LabeledSpan::new_with_span(Some(label.clone()), SourceSpan::from(*span))
         });

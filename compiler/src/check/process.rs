@@ -359,8 +359,18 @@ impl Checker {
                 },
                 _ => DiagnosticKind::ParUsage { name },
             };
+            let verb = |m: Mode| match m {
+                Mode::Write => "written",
+                Mode::Read => "used",
+                Mode::Input => "input",
+                Mode::Output => "output",
+            };
             let d = Diagnostic::error(kind, c.here.span)
-                .with_related(c.other.span, "and in this branch");
+                .with_label(format!("{} in this branch", verb(c.here.mode)))
+                .with_related(
+                    c.other.span,
+                    format!("{} in another branch", verb(c.other.mode)),
+                );
             self.diags.push(d);
         }
     }
