@@ -21,24 +21,12 @@ pub fn prepend<T>(first: T, rest: Vec<T>) -> Vec<T> {
     all
 }
 
-/// Records a recovered syntax error.
+/// Records a recovered syntax error (the parser skipped to the end of the line).
 pub fn recovered<'a>(
     diags: &mut Vec<Diagnostic>,
     error: ErrorRecovery<usize, Token<'a>, Diagnostic>,
-    l: usize,
-    r: usize,
-) -> Decl {
+) {
     diags.push(crate::parser::syntax_error(error.error));
-    Decl {
-        kind: DeclKind::Var {
-            ty: Ty {
-                kind: TyKind::Int,
-                span: Span::new(l, r),
-            },
-            names: Vec::new(),
-        },
-        span: Span::new(l, r),
-    }
 }
 
 /// Operators that may be chained without parentheses (`a + b + c`).

@@ -140,11 +140,16 @@ fn with_expected(diag: Diagnostic, expected: &[String]) -> Diagnostic {
     diag.with_help(format!("expected one of: {}", list.join(", ")))
 }
 
+/// Summarises the expected tokens for the label: one token, or what they have in common.
 fn first_expected(expected: &[String]) -> String {
+    let has = |t: &str| expected.iter().any(|e| e == t);
     match expected {
-        [] => "something else".to_string(),
+        [] => "nothing more".to_string(),
         [one] => occam_term(one),
-        _ => "something else".to_string(),
+        _ if has("\"SEQ\"") && has("\"SKIP\"") => "a process or a declaration".to_string(),
+        _ if has("NAME") && has("INTLIT") => "an expression".to_string(),
+        _ if has("NL") => "the end of the line or one of the tokens below".to_string(),
+        _ => "one of the tokens below".to_string(),
     }
 }
 
