@@ -183,3 +183,31 @@ fn echo_keyboard_to_screen() {
     assert!(o.result.is_ok());
     assert_eq!(o.stdout, "abc.");
 }
+
+#[test]
+fn par_branches_calling_nested_procs_keep_their_static_links() {
+    let src = r#"#INCLUDE "course.module"
+PROC main (CHAN BYTE keyboard?, screen!, error!)
+  PROC P ()
+    [4]INT a :
+    #PRAGMA SHARED a
+    PROC Q (VAL INT i)
+      a[i] := i + 1
+    :
+    SEQ
+      SEQ i = 0 FOR 4
+        a[i] := 0
+      PAR
+        SKIP
+        PAR i = 0 FOR 4
+          Q(i)
+      SEQ i = 0 FOR 4
+        out.int (a[i], 0, screen!)
+  :
+  SEQ
+    P()
+    P()
+:
+"#;
+    assert_eq!(run(src), "12341234");
+}

@@ -98,7 +98,6 @@ impl Tr<'_, '_> {
         high: bool,
         span: Span,
     ) -> Res<()> {
-        self.b.ins().store(mem(), self.ws, child, 0);
         let j = self.local_addr(join_off);
         self.b.ins().store(mem(), j, child, 8);
         let f = self.func_ref(id);
