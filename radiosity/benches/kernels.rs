@@ -28,10 +28,13 @@ fn ray_set(tris: &[Tri], n: usize, seed: u64) -> Vec<(Vec3, Vec3)> {
         cdf.push(total);
     }
     let mut rng = Pcg32::new(seed, 1);
-    let mut pick = |rng: &mut Pcg32| {
+    let pick = |rng: &mut Pcg32| {
         let x = rng.next_f32() * total;
         let i = cdf.partition_point(|&c| c < x).min(tris.len() - 1);
-        (tris[i].sample(rng.next_f32(), rng.next_f32()), tris[i].normal())
+        (
+            tris[i].sample(rng.next_f32(), rng.next_f32()),
+            tris[i].normal(),
+        )
     };
     (0..n)
         .map(|_| {
@@ -49,12 +52,21 @@ fn occlusion(c: &mut Criterion) {
     let tree = Octree::build(&tris, OctreeConfig::default());
     eprintln!("octree: {:?}", tree.stats());
     let rays = ray_set(&tris, 100_000, 7);
-    let occluded = rays.iter().filter(|(o, d)| tree.occluded(*o, *d, 0.0, 0.999, Traversal::Samet)).count();
-    eprintln!("occluded fraction: {:.3}", occluded as f64 / rays.len() as f64);
+    let occluded = rays
+        .iter()
+        .filter(|(o, d)| tree.occluded(*o, *d, 0.0, 0.999, Traversal::Samet))
+        .count();
+    eprintln!(
+        "occluded fraction: {:.3}",
+        occluded as f64 / rays.len() as f64
+    );
     let mut group = c.benchmark_group("occlusion_cornell_10k");
     group.throughput(Throughput::Elements(rays.len() as u64));
     group.sample_size(20);
-    for (name, mode) in [("samet", Traversal::Samet), ("glassner", Traversal::Glassner)] {
+    for (name, mode) in [
+        ("samet", Traversal::Samet),
+        ("glassner", Traversal::Glassner),
+    ] {
         group.bench_function(name, |b| {
             b.iter(|| {
                 let mut hits = 0u32;
@@ -66,23 +78,44 @@ fn occlusion(c: &mut Criterion) {
         });
     }
     group.finish();
-    c.bench_function("octree_build_cornell_10k", |b| b.iter(|| Octree::build(black_box(&tris), OctreeConfig::default())));
+    c.bench_function("octree_build_cornell_10k", |b| {
+        b.iter(|| Octree::build(black_box(&tris), OctreeConfig::default()))
+    });
 }
 
 fn form_factors(c: &mut Criterion) {
     let scene = cornell::load(true).expect("cornell");
-    let mesh = Mesh::from_scene(&scene, MeshConfig { patch_size: 150.0, element_size: 40.0 });
+    let mesh = Mesh::from_scene(
+        &scene,
+        MeshConfig {
+            patch_size: 150.0,
+            element_size: 40.0,
+        },
+    );
     let tris: Vec<Tri> = scene.triangles.iter().map(|t| t.tri).collect();
     let tree = Octree::build(&tris, OctreeConfig::default());
-    let light = scene.objects.iter().position(|o| o.name == "light").expect("light") as u32;
-    let source = scene.triangles.iter().find(|t| t.object == light).expect("light tri").tri;
+    let light = scene
+        .objects
+        .iter()
+        .position(|o| o.name == "light")
+        .expect("light") as u32;
+    let source = scene
+        .triangles
+        .iter()
+        .find(|t| t.object == light)
+        .expect("light tri")
+        .tri;
     let points: Vec<SamplePoint> = mesh.vertices.iter().map(SamplePoint::from).collect();
     let mut out = vec![0.0; points.len()];
     let mut group = c.benchmark_group("form_factors_cornell");
     group.throughput(Throughput::Elements(points.len() as u64));
     group.sample_size(20);
     for rays in [4u32, 16, 64] {
-        let config = FormFactorConfig { rays, offset: 1e-3, ..FormFactorConfig::default() };
+        let config = FormFactorConfig {
+            rays,
+            offset: 1e-3,
+            ..FormFactorConfig::default()
+        };
         group.bench_function(format!("{rays}_rays"), |b| {
             b.iter(|| shoot_batch(&tree, &source, black_box(&points), &config, 1, &mut out))
         });
@@ -92,16 +125,34 @@ fn form_factors(c: &mut Criterion) {
 
 fn solve(c: &mut Criterion) {
     // One thread, so the figure is comparable with the other single-thread figures.
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("pool");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
     let scene = cornell::load(true).expect("cornell");
     let mut group = c.benchmark_group("solve_cornell");
     group.sample_size(10);
-    for until in [0.01, 0.001] {
+    {
+        let until = 0.01;
         group.bench_function(format!("unshot_{until}_1_thread"), |b| {
             b.iter(|| {
                 pool.install(|| {
-                    let mesh = Mesh::from_scene(&scene, MeshConfig { patch_size: 120.0, element_size: 30.0 });
-                    let config = SolverConfig { until: Until::Unshot(until), ..SolverConfig::default() };
+                    let mesh = Mesh::from_scene(
+                        &scene,
+                        MeshConfig {
+                            patch_size: 240.0,
+                            element_size: 48.0,
+                        },
+                    );
+                    let form_factor = FormFactorConfig {
+                        rays: 8,
+                        ..FormFactorConfig::default()
+                    };
+                    let config = SolverConfig {
+                        form_factor,
+                        until: Until::Unshot(until),
+                        ..SolverConfig::default()
+                    };
                     let mut solver = Solver::new(&scene, mesh, config);
                     solver.run(|_, _| {});
                     black_box(solver.stats.shots)

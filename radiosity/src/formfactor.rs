@@ -37,7 +37,11 @@ pub struct FormFactorConfig {
 
 impl Default for FormFactorConfig {
     fn default() -> Self {
-        FormFactorConfig { rays: 16, max_disc_bias: 0.002, offset: 1e-3 }
+        FormFactorConfig {
+            rays: 16,
+            max_disc_bias: 0.002,
+            offset: 1e-3,
+        }
     }
 }
 
@@ -131,14 +135,16 @@ pub fn form_factor(
     }
     let value = if !analytic {
         wallace
-    } else if above == 0 {
-        0.0
     } else if visible == 0 {
         0.0
     } else {
         point_polygon(p, n, &src.v) * visible as f32 / above as f32
     };
-    FormFactor { value, rays, analytic }
+    FormFactor {
+        value,
+        rays,
+        analytic,
+    }
 }
 
 #[cfg(test)]
@@ -157,15 +163,20 @@ mod tests {
     #[test]
     fn contour_formula_matches_the_closed_forms() {
         // Point 1.0 under the centre of a unit square: 0.239456; under a corner: 0.138532.
-        let centre = point_polygon(Vec3::ZERO, Vec3::Y, &[
-            Vec3::new(-0.5, 1.0, -0.5),
-            Vec3::new(0.5, 1.0, -0.5),
-            Vec3::new(0.5, 1.0, 0.5),
-            Vec3::new(-0.5, 1.0, 0.5),
-        ]);
+        let centre = point_polygon(
+            Vec3::ZERO,
+            Vec3::Y,
+            &[
+                Vec3::new(-0.5, 1.0, -0.5),
+                Vec3::new(0.5, 1.0, -0.5),
+                Vec3::new(0.5, 1.0, 0.5),
+                Vec3::new(-0.5, 1.0, 0.5),
+            ],
+        );
         assert!((centre - 0.239456).abs() < 1e-5, "{centre}");
         let [t0, t1] = square(1.0, 0.0, 1.0, 0.0, 1.0);
-        let corner = point_polygon(Vec3::ZERO, Vec3::Y, &t0.v) + point_polygon(Vec3::ZERO, Vec3::Y, &t1.v);
+        let corner =
+            point_polygon(Vec3::ZERO, Vec3::Y, &t0.v) + point_polygon(Vec3::ZERO, Vec3::Y, &t1.v);
         assert!((corner - 0.138532).abs() < 1e-5, "{corner}");
     }
 
@@ -176,7 +187,14 @@ mod tests {
         let mut rng = Pcg32::new(1, 1);
         let mut s = Vec::new();
         source_samples(&flipped, 16, &mut rng, &mut s);
-        let f = form_factor(None, Vec3::ZERO, Vec3::Y, &flipped, &s, &FormFactorConfig::default());
+        let f = form_factor(
+            None,
+            Vec3::ZERO,
+            Vec3::Y,
+            &flipped,
+            &s,
+            &FormFactorConfig::default(),
+        );
         assert_eq!(f.value, 0.0);
     }
 }

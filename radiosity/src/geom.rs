@@ -171,7 +171,13 @@ pub fn plane_cut_segment(a: &Tri, b: &Tri, eps: f32) -> Option<(Vec3, Vec3)> {
 }
 
 /// Clips a segment lying in the plane of `t` (normal `n`) to the triangle.
-fn clip_segment_to_triangle(t: &Tri, n: Vec3, mut p: Vec3, mut q: Vec3, eps: f32) -> Option<(Vec3, Vec3)> {
+fn clip_segment_to_triangle(
+    t: &Tri,
+    n: Vec3,
+    mut p: Vec3,
+    mut q: Vec3,
+    eps: f32,
+) -> Option<(Vec3, Vec3)> {
     for i in 0..3 {
         let (a, b) = (t.v[i], t.v[(i + 1) % 3]);
         let inward = n.cross(b - a).normalize_or_zero();
@@ -195,14 +201,25 @@ mod tests {
     #[test]
     fn closest_point_inside_and_outside() {
         let t = Tri::new(Vec3::ZERO, Vec3::X, Vec3::Y);
-        assert_eq!(t.closest_point(Vec3::new(0.25, 0.25, 1.0)), Vec3::new(0.25, 0.25, 0.0));
+        assert_eq!(
+            t.closest_point(Vec3::new(0.25, 0.25, 1.0)),
+            Vec3::new(0.25, 0.25, 0.0)
+        );
         assert_eq!(t.closest_point(Vec3::new(-1.0, -1.0, 0.0)), Vec3::ZERO);
     }
 
     #[test]
     fn touching_triangles_meet_along_the_edge() {
-        let floor = Tri::new(Vec3::ZERO, Vec3::new(0.0, 0.0, 10.0), Vec3::new(10.0, 0.0, 0.0));
-        let wall = Tri::new(Vec3::new(1.0, 0.0, 1.0), Vec3::new(3.0, 0.0, 1.0), Vec3::new(1.0, 2.0, 1.0));
+        let floor = Tri::new(
+            Vec3::ZERO,
+            Vec3::new(0.0, 0.0, 10.0),
+            Vec3::new(10.0, 0.0, 0.0),
+        );
+        let wall = Tri::new(
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(3.0, 0.0, 1.0),
+            Vec3::new(1.0, 2.0, 1.0),
+        );
         let (p, q) = plane_cut_segment(&floor, &wall, 1e-4).expect("segment");
         assert!((p - q).length() > 1.9);
     }

@@ -28,7 +28,11 @@ pub struct SamplePoint {
 
 impl From<&Vertex> for SamplePoint {
     fn from(v: &Vertex) -> Self {
-        SamplePoint { pos: v.pos.to_array(), normal: v.normal.to_array(), eval: v.eval.to_array() }
+        SamplePoint {
+            pos: v.pos.to_array(),
+            normal: v.normal.to_array(),
+            eval: v.eval.to_array(),
+        }
     }
 }
 
@@ -73,7 +77,14 @@ pub fn shoot_batch(
     let mut stats = BatchStats::default();
     for (p, o) in points.iter().zip(out.iter_mut()) {
         source_samples(source, config.rays, &mut rng, &mut samples);
-        let f = form_factor(Some(octree), Vec3::from(p.eval), Vec3::from(p.normal), source, &samples, config);
+        let f = form_factor(
+            Some(octree),
+            Vec3::from(p.eval),
+            Vec3::from(p.normal),
+            source,
+            &samples,
+            config,
+        );
         *o = f.value;
         stats.form_factors += 1;
         stats.rays += f.rays as u64;
@@ -85,6 +96,12 @@ pub fn shoot_batch(
 /// Answers a batch of shadow rays into `out` (true: occluded).
 pub fn occlusion_batch(octree: &Octree, rays: &[Ray], mode: Traversal, out: &mut [bool]) {
     for (r, o) in rays.iter().zip(out.iter_mut()) {
-        *o = octree.occluded(Vec3::from(r.origin), Vec3::from(r.dir), r.tmin, r.tmax, mode);
+        *o = octree.occluded(
+            Vec3::from(r.origin),
+            Vec3::from(r.dir),
+            r.tmin,
+            r.tmax,
+            mode,
+        );
     }
 }

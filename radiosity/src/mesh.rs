@@ -86,12 +86,17 @@ pub struct Mesh {
 }
 
 /// An `f32` ordered for the heap (lengths are finite).
-#[derive(Clone, Copy, PartialEq, PartialOrd)]
+#[derive(Clone, Copy, PartialEq)]
 struct OrdF32(f32);
 impl Eq for OrdF32 {}
 impl Ord for OrdF32 {
     fn cmp(&self, other: &Self) -> std::cmp::Ordering {
         self.0.total_cmp(&other.0)
+    }
+}
+impl PartialOrd for OrdF32 {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
     }
 }
 
@@ -141,14 +146,25 @@ impl Mesh {
             let v = st.tri.v.map(|p| {
                 let key = (p / (eps * 4.0)).round().as_i64vec3().to_array();
                 let bucket = index.entry(key).or_default();
-                let found = bucket.iter().copied().find(|&i| mesh.vertices[i as usize].normal.dot(n) > 0.999);
+                let found = bucket
+                    .iter()
+                    .copied()
+                    .find(|&i| mesh.vertices[i as usize].normal.dot(n) > 0.999);
                 found.unwrap_or_else(|| {
-                    mesh.vertices.push(Vertex { pos: p, normal: n, eval: p });
+                    mesh.vertices.push(Vertex {
+                        pos: p,
+                        normal: n,
+                        eval: p,
+                    });
                     bucket.push(mesh.vertices.len() as u32 - 1);
                     mesh.vertices.len() as u32 - 1
                 })
             });
-            mesh.push_element(Element { v, object: st.object, patch: 0 });
+            mesh.push_element(Element {
+                v,
+                object: st.object,
+                patch: 0,
+            });
         }
         mesh
     }
@@ -156,7 +172,10 @@ impl Mesh {
     fn push_element(&mut self, e: Element) -> u32 {
         let id = self.elements.len() as u32;
         for i in 0..3 {
-            self.edges.entry(edge_key(e.v[i], e.v[(i + 1) % 3])).or_default().push(id);
+            self.edges
+                .entry(edge_key(e.v[i], e.v[(i + 1) % 3]))
+                .or_default()
+                .push(id);
         }
         self.elements.push(e);
         id
@@ -170,7 +189,9 @@ impl Mesh {
         for &t in &around {
             let e = self.elements[t as usize];
             // Rotate so that the split edge is v[0] -> v[1].
-            let i = (0..3).find(|&i| edge_key(e.v[i], e.v[(i + 1) % 3]) == edge_key(a, b)).unwrap_or(0);
+            let i = (0..3)
+                .find(|&i| edge_key(e.v[i], e.v[(i + 1) % 3]) == edge_key(a, b))
+                .unwrap_or(0);
             let (x, y, c) = (e.v[i], e.v[(i + 1) % 3], e.v[(i + 2) % 3]);
             self.elements[t as usize].v = [x, m, c];
             let t2 = self.elements.len() as u32;
@@ -180,7 +201,10 @@ impl Mesh {
             }
             self.edges.entry(edge_key(x, m)).or_default().push(t);
             self.edges.entry(edge_key(m, y)).or_default().push(t2);
-            self.edges.entry(edge_key(m, c)).or_default().extend([t, t2]);
+            self.edges
+                .entry(edge_key(m, c))
+                .or_default()
+                .extend([t, t2]);
         }
         around
     }
@@ -191,7 +215,11 @@ impl Mesh {
         let s = (p - va.pos).length() / (vb.pos - va.pos).length().max(1e-30);
         let normal = (va.normal + vb.normal).normalize_or(va.normal);
         let eval = va.eval.lerp(vb.eval, s);
-        self.vertices.push(Vertex { pos: p, normal, eval });
+        self.vertices.push(Vertex {
+            pos: p,
+            normal,
+            eval,
+        });
         self.vertices.len() as u32 - 1
     }
 
@@ -212,7 +240,10 @@ impl Mesh {
             let m = self.add_edge_vertex(a, b, (self.pos(a) + self.pos(b)) * 0.5);
             for t in self.split_edge(a, b, m) {
                 let e = self.elements[t as usize];
-                let c = e.v.into_iter().find(|&v| v != a && v != b && v != m).unwrap_or(m);
+                let c =
+                    e.v.into_iter()
+                        .find(|&v| v != a && v != b && v != m)
+                        .unwrap_or(m);
                 for (x, y) in [(a, m), (m, b), (m, c)] {
                     let len = (self.pos(x) - self.pos(y)).length();
                     if len > max_edge {
@@ -225,7 +256,9 @@ impl Mesh {
 
     /// Returns the elements sharing edge `(a, b)`.
     pub fn elements_on_edge(&self, a: u32, b: u32) -> &[u32] {
-        self.edges.get(&edge_key(a, b)).map_or(&[], |v| v.as_slice())
+        self.edges
+            .get(&edge_key(a, b))
+            .map_or(&[], |v| v.as_slice())
     }
 
     /// Returns every edge once, as `(a, b)` with `a < b`.
@@ -239,7 +272,9 @@ impl Mesh {
     fn split_t_junctions(&mut self, eps: f32) -> usize {
         let mut splits = 0;
         for _pass in 0..64 {
-            let Some((a, b, v)) = self.find_t_junction(eps) else { break };
+            let Some((a, b, v)) = self.find_t_junction(eps) else {
+                break;
+            };
             splits += self.split_edge(a, b, v).len().min(1);
         }
         splits
@@ -286,7 +321,9 @@ impl Mesh {
         let mut splits = 0;
         for (p, q, n) in cuts {
             for _guard in 0..256 {
-                let Some(t) = self.find_straddler(p, q, n, eps) else { break };
+                let Some(t) = self.find_straddler(p, q, n, eps) else {
+                    break;
+                };
                 splits += self.cut_element(t, p, q, n, eps);
             }
         }
@@ -299,7 +336,8 @@ impl Mesh {
         self.elements.iter().position(|e| {
             let t = self.tri(e);
             let tn = t.normal();
-            if tn.dot(n) < 0.999 || tn.dot(p - t.v[0]).abs() > eps || tn.dot(q - t.v[0]).abs() > eps {
+            if tn.dot(n) < 0.999 || tn.dot(p - t.v[0]).abs() > eps || tn.dot(q - t.v[0]).abs() > eps
+            {
                 return false;
             }
             let s = t.v.map(|v| m.dot(v - p));
@@ -346,7 +384,11 @@ impl Mesh {
         for (i, v) in self.vertices.iter_mut().enumerate() {
             // Interior vertices are pulled equally in all directions (|pull| small): leave them.
             let dir = pull[i];
-            v.eval = if dir.length() > 0.5 { v.pos + dir.normalize() * shortest[i] * 1e-3 } else { v.pos };
+            v.eval = if dir.length() > 0.5 {
+                v.pos + dir.normalize() * shortest[i] * 1e-3
+            } else {
+                v.pos
+            };
         }
     }
 
@@ -361,8 +403,14 @@ impl Mesh {
 }
 
 fn boxes_touch(a: &Tri, b: &Tri, eps: f32) -> bool {
-    let (alo, ahi) = (a.v[0].min(a.v[1]).min(a.v[2]), a.v[0].max(a.v[1]).max(a.v[2]));
-    let (blo, bhi) = (b.v[0].min(b.v[1]).min(b.v[2]), b.v[0].max(b.v[1]).max(b.v[2]));
+    let (alo, ahi) = (
+        a.v[0].min(a.v[1]).min(a.v[2]),
+        a.v[0].max(a.v[1]).max(a.v[2]),
+    );
+    let (blo, bhi) = (
+        b.v[0].min(b.v[1]).min(b.v[2]),
+        b.v[0].max(b.v[1]).max(b.v[2]),
+    );
     !(alo.cmpgt(bhi + Vec3::splat(eps)).any() || blo.cmpgt(ahi + Vec3::splat(eps)).any())
 }
 
@@ -395,7 +443,13 @@ mod tests {
     #[test]
     fn cornell_floor_is_cut_along_the_block_footprints() {
         let scene = cornell::load(true).expect("scene");
-        let mesh = Mesh::from_scene(&scene, MeshConfig { patch_size: 1000.0, element_size: 1000.0 });
+        let mesh = Mesh::from_scene(
+            &scene,
+            MeshConfig {
+                patch_size: 1000.0,
+                element_size: 1000.0,
+            },
+        );
         assert!(mesh.stats.d0_splits > 0, "{:?}", mesh.stats);
         // No floor element straddles the line of the short block's front face (z from 65 to 114).
         let (p, q) = (Vec3::new(130.0, 0.0, 65.0), Vec3::new(290.0, 0.0, 114.0));
@@ -405,7 +459,13 @@ mod tests {
     #[test]
     fn mesh_is_conforming_every_edge_has_one_or_two_elements() {
         let scene = cornell::load(true).expect("scene");
-        let mesh = Mesh::from_scene(&scene, MeshConfig { patch_size: 150.0, element_size: 60.0 });
+        let mesh = Mesh::from_scene(
+            &scene,
+            MeshConfig {
+                patch_size: 150.0,
+                element_size: 60.0,
+            },
+        );
         for (a, b) in mesh.edge_list() {
             let n = mesh.elements_on_edge(a, b).len();
             assert!(n == 1 || n == 2, "edge {a}-{b} has {n} elements");

@@ -66,7 +66,10 @@ pub struct OctreeConfig {
 
 impl Default for OctreeConfig {
     fn default() -> Self {
-        OctreeConfig { max_leaf: 6, max_depth: 12 }
+        OctreeConfig {
+            max_leaf: 6,
+            max_depth: 12,
+        }
     }
 }
 
@@ -116,7 +119,13 @@ impl Octree {
             lo: lo - Vec3::splat(pad),
             cell: (size + 2.0 * pad) / (1u32 << depth) as f32,
             depth,
-            nodes: vec![Node { origin: UVec3::ZERO, level: 0, parent: 0, first: 0, count: 0 }],
+            nodes: vec![Node {
+                origin: UVec3::ZERO,
+                level: 0,
+                parent: 0,
+                first: 0,
+                count: 0,
+            }],
             tris: Vec::new(),
             ids: Vec::new(),
         };
@@ -140,20 +149,37 @@ impl Octree {
             let children: Vec<(UVec3, Vec<u32>)> = (0..8u32)
                 .map(|c| {
                     let origin = node.origin + UVec3::new(c & 1, (c >> 1) & 1, (c >> 2) & 1) * half;
-                    let child = Node { origin, level: node.level + 1, parent: index as u32, first: 0, count: 0 };
+                    let child = Node {
+                        origin,
+                        level: node.level + 1,
+                        parent: index as u32,
+                        first: 0,
+                        count: 0,
+                    };
                     let (blo, bhi) = self.node_box(&child);
-                    let inside = members.iter().copied().filter(|&i| tri_overlaps_box(&tris[i as usize], blo, bhi)).collect();
+                    let inside = members
+                        .iter()
+                        .copied()
+                        .filter(|&i| tri_overlaps_box(&tris[i as usize], blo, bhi))
+                        .collect();
                     (origin, inside)
                 })
                 .collect();
-            // Splitting that leaves every child as full as the parent gains nothing: stay a leaf.
-            if children.iter().any(|(_, m)| m.len() < members.len()) {
+            // A child as full as the parent means its triangles all meet in it (a shared vertex
+            // or edge): splitting further gains nothing there and would recurse to max depth.
+            if children.iter().all(|(_, m)| m.len() < members.len()) {
                 let first = self.nodes.len();
                 self.nodes[index].first = first as u32;
                 self.nodes[index].count = INTERIOR;
                 for (origin, _) in &children {
                     let level = node.level + 1;
-                    self.nodes.push(Node { origin: *origin, level, parent: index as u32, first: 0, count: 0 });
+                    self.nodes.push(Node {
+                        origin: *origin,
+                        level,
+                        parent: index as u32,
+                        first: 0,
+                        count: 0,
+                    });
                 }
                 for (c, (_, inside)) in children.into_iter().enumerate() {
                     self.build_node(first + c, tris, inside, config);
@@ -165,7 +191,11 @@ impl Octree {
         self.nodes[index].count = members.len() as u32;
         for i in members {
             let t = &tris[i as usize];
-            self.tris.push(PackedTri { v0: t.v[0], e1: t.v[1] - t.v[0], e2: t.v[2] - t.v[0] });
+            self.tris.push(PackedTri {
+                v0: t.v[0],
+                e1: t.v[1] - t.v[0],
+                e2: t.v[2] - t.v[0],
+            });
             self.ids.push(i);
         }
     }
@@ -197,14 +227,23 @@ impl Octree {
     pub fn occluded(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32, mode: Traversal) -> bool {
         let mut hit = false;
         self.walk(o, d, tmin, tmax, mode, |tris, _, _| {
-            hit = tris.iter().any(|t| ray_triangle(o, d, t.v0, t.e1, t.e2).is_some_and(|h| h > tmin && h < tmax));
+            hit = tris.iter().any(|t| {
+                ray_triangle(o, d, t.v0, t.e1, t.e2).is_some_and(|h| h > tmin && h < tmax)
+            });
             hit
         });
         hit
     }
 
     /// Returns the nearest hit `(t, triangle id)` of `o + t d` with `tmin < t < tmax`.
-    pub fn first_hit(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32, mode: Traversal) -> Option<(f32, u32)> {
+    pub fn first_hit(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        tmin: f32,
+        tmax: f32,
+        mode: Traversal,
+    ) -> Option<(f32, u32)> {
         let mut best: Option<(f32, u32)> = None;
         self.walk(o, d, tmin, tmax, mode, |tris, ids, t_exit| {
             for (t, &id) in tris.iter().zip(ids) {
@@ -233,10 +272,16 @@ impl Octree {
         mut visit: impl FnMut(&[PackedTri], &[u32], f32) -> bool,
     ) {
         let inv = Vec3::ONE / d;
-        let Some(t0) = self.enter(o, inv, tmin, tmax) else { return };
+        let Some(t0) = self.enter(o, inv, tmin, tmax) else {
+            return;
+        };
         let n_cells = 1u32 << self.depth;
         let p = o + d * t0;
-        let q = ((p - self.lo) / self.cell).floor().max(Vec3::ZERO).as_uvec3().min(UVec3::splat(n_cells - 1));
+        let q = ((p - self.lo) / self.cell)
+            .floor()
+            .max(Vec3::ZERO)
+            .as_uvec3()
+            .min(UVec3::splat(n_cells - 1));
         let mut leaf = self.descend(0, q);
         loop {
             let node = &self.nodes[leaf];
@@ -326,13 +371,25 @@ trait NanSafe {
 
 impl NanSafe for Vec3 {
     fn max_element_nan_safe(self) -> f32 {
-        self.to_array().into_iter().filter(|x| !x.is_nan()).fold(f32::NEG_INFINITY, f32::max)
+        self.to_array()
+            .into_iter()
+            .filter(|x| !x.is_nan())
+            .fold(f32::NEG_INFINITY, f32::max)
     }
     fn min_element_nan_safe(self) -> f32 {
-        self.to_array().into_iter().filter(|x| !x.is_nan()).fold(f32::INFINITY, f32::min)
+        self.to_array()
+            .into_iter()
+            .filter(|x| !x.is_nan())
+            .fold(f32::INFINITY, f32::min)
     }
     fn abs_nan_to_inf(self) -> Vec3 {
-        Vec3::from_array(self.to_array().map(|x| if x.is_nan() || x < 0.0 { f32::INFINITY } else { x }))
+        Vec3::from_array(self.to_array().map(|x| {
+            if x.is_nan() || x < 0.0 {
+                f32::INFINITY
+            } else {
+                x
+            }
+        }))
     }
 }
 
@@ -367,6 +424,7 @@ fn tri_overlaps_box(t: &Tri, lo: Vec3, hi: Vec3) -> bool {
 /// oracle for tests).
 pub fn occluded_brute_force(tris: &[Tri], o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> bool {
     tris.iter().any(|t| {
-        ray_triangle(o, d, t.v[0], t.v[1] - t.v[0], t.v[2] - t.v[0]).is_some_and(|h| h > tmin && h < tmax)
+        ray_triangle(o, d, t.v[0], t.v[1] - t.v[0], t.v[2] - t.v[0])
+            .is_some_and(|h| h > tmin && h < tmax)
     })
 }

@@ -28,7 +28,9 @@ pub enum SceneError {
         message: String,
     },
     /// Occurs when a face refers to a vertex that does not exist (`f 1 2 99` with 3 vertices).
-    #[error("{file}:{line}: face vertex index {index} is out of range (the file has {count} vertices so far)")]
+    #[error(
+        "{file}:{line}: face vertex index {index} is out of range (the file has {count} vertices so far)"
+    )]
     FaceIndexOutOfRange {
         /// File name.
         file: String,
@@ -80,7 +82,9 @@ pub enum SceneError {
         message: String,
     },
     /// Occurs when the camera comment is malformed.
-    #[error("{file}:{line}: malformed camera comment (expected `# camera: pos (x y z) dir (x y z) up (x y z) fov DEG`)")]
+    #[error(
+        "{file}:{line}: malformed camera comment (expected `# camera: pos (x y z) dir (x y z) up (x y z) fov DEG`)"
+    )]
     BadCamera {
         /// File name.
         file: String,
@@ -215,7 +219,11 @@ fn check_obj(
     text: &str,
     library: &dyn Fn(&str) -> Result<String, String>,
 ) -> Result<Checked, SceneError> {
-    let mut out = Checked { camera: None, libraries: HashMap::new(), left_out: Vec::new() };
+    let mut out = Checked {
+        camera: None,
+        libraries: HashMap::new(),
+        left_out: Vec::new(),
+    };
     let mut materials: Vec<String> = Vec::new();
     let mut vertices = 0usize;
     let (mut normals, mut texcoords) = (false, false);
@@ -223,7 +231,10 @@ fn check_obj(
         let line = i + 1;
         let trimmed = raw.trim();
         if let Some(rest) = trimmed.strip_prefix("# camera:") {
-            out.camera = Some(parse_camera(rest).ok_or(SceneError::BadCamera { file: file.into(), line })?);
+            out.camera = Some(parse_camera(rest).ok_or(SceneError::BadCamera {
+                file: file.into(),
+                line,
+            })?);
             continue;
         }
         let mut words = trimmed.split_whitespace();
@@ -249,17 +260,24 @@ fn check_obj(
             Some("usemtl") => {
                 let name = words.collect::<Vec<_>>().join(" ");
                 if !materials.contains(&name) {
-                    return Err(SceneError::UnknownMaterial { file: file.into(), line, name });
+                    return Err(SceneError::UnknownMaterial {
+                        file: file.into(),
+                        line,
+                        name,
+                    });
                 }
             }
             _ => {}
         }
     }
     if normals {
-        out.left_out.push("vertex normals (vn) ignored: radiosity uses the geometric normal of each face".into());
+        out.left_out.push(
+            "vertex normals (vn) ignored: radiosity uses the geometric normal of each face".into(),
+        );
     }
     if texcoords {
-        out.left_out.push("texture coordinates (vt) ignored: textures are not supported".into());
+        out.left_out
+            .push("texture coordinates (vt) ignored: textures are not supported".into());
     }
     Ok(out)
 }
@@ -309,20 +327,36 @@ fn check_face<'a>(
             line,
             message: format!("`{w}` is not a vertex index"),
         })?;
-        let resolved = if index < 0 { count as i64 + index + 1 } else { index };
+        let resolved = if index < 0 {
+            count as i64 + index + 1
+        } else {
+            index
+        };
         if resolved < 1 || resolved > count as i64 {
-            return Err(SceneError::FaceIndexOutOfRange { file: file.into(), line, index, count });
+            return Err(SceneError::FaceIndexOutOfRange {
+                file: file.into(),
+                line,
+                index,
+                count,
+            });
         }
         corners += 1;
     }
     if corners < 3 {
-        return Err(SceneError::ShortFace { file: file.into(), line });
+        return Err(SceneError::ShortFace {
+            file: file.into(),
+            line,
+        });
     }
     Ok(())
 }
 
 /// Checks a material library's `Kd`/`Ke` lines; returns the material names it defines.
-fn check_mtl(file: &str, text: &str, left_out: &mut Vec<String>) -> Result<Vec<String>, SceneError> {
+fn check_mtl(
+    file: &str,
+    text: &str,
+    left_out: &mut Vec<String>,
+) -> Result<Vec<String>, SceneError> {
     let mut names = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
@@ -332,21 +366,37 @@ fn check_mtl(file: &str, text: &str, left_out: &mut Vec<String>) -> Result<Vec<S
             Some("Kd") => {
                 let kd = parse_numbers(file, line, words, 3)?;
                 if kd.iter().any(|&x| !(0.0..=1.0).contains(&x)) {
-                    return Err(out_of_range(file, line, "a reflectance Kd must lie in [0, 1]"));
+                    return Err(out_of_range(
+                        file,
+                        line,
+                        "a reflectance Kd must lie in [0, 1]",
+                    ));
                 }
             }
             Some("Ke") => {
                 let ke = parse_numbers(file, line, words, 3)?;
                 if ke.iter().any(|&x| x < 0.0) {
-                    return Err(out_of_range(file, line, "an emission Ke must not be negative"));
+                    return Err(out_of_range(
+                        file,
+                        line,
+                        "an emission Ke must not be negative",
+                    ));
                 }
             }
             Some(key) if key.starts_with("map_") || key == "bump" || key == "disp" => {
-                left_out.push(format!("{file}:{line}: `{key}` ignored: textures are not supported"));
+                left_out.push(format!(
+                    "{file}:{line}: `{key}` ignored: textures are not supported"
+                ));
             }
             Some("Ks" | "Ns" | "Ni" | "Tf" | "Tr" | "d" | "illum") => {
-                let msg = format!("{file}:{line}: non-diffuse parameters ignored: radiosity is diffuse only");
-                if !left_out.contains(&msg) && !left_out.iter().any(|m| m.starts_with(file) && m.contains("non-diffuse")) {
+                let msg = format!(
+                    "{file}:{line}: non-diffuse parameters ignored: radiosity is diffuse only"
+                );
+                if !left_out.contains(&msg)
+                    && !left_out
+                        .iter()
+                        .any(|m| m.starts_with(file) && m.contains("non-diffuse"))
+                {
                     left_out.push(msg);
                 }
             }
@@ -357,12 +407,19 @@ fn check_mtl(file: &str, text: &str, left_out: &mut Vec<String>) -> Result<Vec<S
 }
 
 fn out_of_range(file: &str, line: usize, message: &str) -> SceneError {
-    SceneError::OutOfRange { file: file.into(), line, message: message.into() }
+    SceneError::OutOfRange {
+        file: file.into(),
+        line,
+        message: message.into(),
+    }
 }
 
 /// Parses `pos (x y z) dir (x y z) up (x y z) fov DEG`.
 fn parse_camera(text: &str) -> Option<Camera> {
-    let cleaned: String = text.chars().map(|c| if c == '(' || c == ')' { ' ' } else { c }).collect();
+    let cleaned: String = text
+        .chars()
+        .map(|c| if c == '(' || c == ')' { ' ' } else { c })
+        .collect();
     let words: Vec<&str> = cleaned.split_whitespace().collect();
     let mut fields: HashMap<&str, Vec<f32>> = HashMap::new();
     let mut key = "";
@@ -373,19 +430,38 @@ fn parse_camera(text: &str) -> Option<Camera> {
             Err(_) => key = w,
         }
     }
-    let v = |k: &str| fields.get(k).filter(|f| f.len() == 3).map(|f| Vec3::new(f[0], f[1], f[2]));
+    let v = |k: &str| {
+        fields
+            .get(k)
+            .filter(|f| f.len() == 3)
+            .map(|f| Vec3::new(f[0], f[1], f[2]))
+    };
     let fov = fields.get("fov").filter(|f| f.len() == 1)?[0];
     let dir = v("dir")?;
     let up = v("up")?;
-    (dir.length() > 0.0 && up.cross(dir).length() > 0.0 && fov > 0.0 && fov < 180.0)
-        .then_some(Camera { pos: v("pos")?, dir: dir.normalize(), up: up.normalize(), fov_deg: fov })
+    (dir.length() > 0.0 && up.cross(dir).length() > 0.0 && fov > 0.0 && fov < 180.0).then_some(
+        Camera {
+            pos: v("pos")?,
+            dir: dir.normalize(),
+            up: up.normalize(),
+            fov_deg: fov,
+        },
+    )
 }
 
 type Models = (Vec<tobj::Model>, Vec<tobj::Material>);
 
 /// Runs tobj on text that already passed [`check_obj`].
-fn run_tobj(file: &str, text: &str, libraries: &HashMap<String, String>) -> Result<Models, SceneError> {
-    let options = tobj::LoadOptions { triangulate: true, single_index: false, ..Default::default() };
+fn run_tobj(
+    file: &str,
+    text: &str,
+    libraries: &HashMap<String, String>,
+) -> Result<Models, SceneError> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ..Default::default()
+    };
     let loader = |p: &std::path::Path| {
         let name = p.to_string_lossy();
         match libraries.get(name.as_ref()) {
@@ -393,9 +469,17 @@ fn run_tobj(file: &str, text: &str, libraries: &HashMap<String, String>) -> Resu
             None => Err(tobj::LoadError::OpenFileFailed),
         }
     };
-    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, loader)
-        .map_err(|e| SceneError::Obj { file: file.into(), message: e.to_string() })?;
-    let materials = materials.map_err(|e| SceneError::Obj { file: file.into(), message: e.to_string() })?;
+    let (models, materials) =
+        tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, loader).map_err(
+            |e| SceneError::Obj {
+                file: file.into(),
+                message: e.to_string(),
+            },
+        )?;
+    let materials = materials.map_err(|e| SceneError::Obj {
+        file: file.into(),
+        message: e.to_string(),
+    })?;
     Ok((models, materials))
 }
 
@@ -404,9 +488,19 @@ fn collect_triangles(scene: &mut Scene, models: &[tobj::Model], materials: &[tob
     let mut object_of: HashMap<(String, Option<usize>), u32> = HashMap::new();
     let positions: Vec<Vec<Vec3>> = models
         .iter()
-        .map(|m| m.mesh.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect())
+        .map(|m| {
+            m.mesh
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect()
+        })
         .collect();
-    let scale = positions.iter().flatten().fold(0.0f32, |s, p| s.max(p.abs().max_element())).max(1e-30);
+    let scale = positions
+        .iter()
+        .flatten()
+        .fold(0.0f32, |s, p| s.max(p.abs().max_element()))
+        .max(1e-30);
     for (model, pos) in models.iter().zip(&positions) {
         let key = (model.name.clone(), model.mesh.material_id);
         let object = *object_of.entry(key).or_insert_with(|| {
@@ -428,7 +522,11 @@ fn collect_triangles(scene: &mut Scene, models: &[tobj::Model], materials: &[tob
 fn object_for(model: &tobj::Model, materials: &[tobj::Material]) -> Object {
     let material = model.mesh.material_id.and_then(|i| materials.get(i));
     let v = |a: Option<[f32; 3]>, d: f32| a.map(Vec3::from).unwrap_or(Vec3::splat(d));
-    let name = if model.name.is_empty() { "unnamed".to_string() } else { model.name.clone() };
+    let name = if model.name.is_empty() {
+        "unnamed".to_string()
+    } else {
+        model.name.clone()
+    };
     Object {
         name,
         reflectance: v(material.and_then(|m| m.diffuse), 0.5),
@@ -452,12 +550,20 @@ pub mod cornell {
         let scene = load(true)?;
         let mut out = Vec::new();
         for o in 0..scene.objects.len() as u32 {
-            let tris: Vec<_> = scene.triangles.iter().filter(|t| t.object == o).map(|t| t.tri).collect();
+            let tris: Vec<_> = scene
+                .triangles
+                .iter()
+                .filter(|t| t.object == o)
+                .map(|t| t.tri)
+                .collect();
             if let [t0, t1] = tris.as_slice() {
                 let q = [t0.v[0], t0.v[1], t0.v[2], t1.v[2]];
                 let at = |i: u32, j: u32| {
                     let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
-                    q[0] * (1.0 - u) * (1.0 - v) + q[1] * u * (1.0 - v) + q[2] * u * v + q[3] * (1.0 - u) * v
+                    q[0] * (1.0 - u) * (1.0 - v)
+                        + q[1] * u * (1.0 - v)
+                        + q[2] * u * v
+                        + q[3] * (1.0 - u) * v
                 };
                 for i in 0..n {
                     for j in 0..n {
@@ -475,9 +581,17 @@ pub mod cornell {
 
     /// Loads the embedded Cornell box (with the blocks when `blocks` is true).
     pub fn load(blocks: bool) -> Result<super::Scene, super::SceneError> {
-        let (name, text) = if blocks { ("cornell-box.obj", OBJ) } else { ("cornell-empty.obj", EMPTY_OBJ) };
+        let (name, text) = if blocks {
+            ("cornell-box.obj", OBJ)
+        } else {
+            ("cornell-empty.obj", EMPTY_OBJ)
+        };
         super::load_obj(name, text, &|lib| {
-            if lib == "cornell-box.mtl" { Ok(MTL.to_string()) } else { Err("not embedded".into()) }
+            if lib == "cornell-box.mtl" {
+                Ok(MTL.to_string())
+            } else {
+                Err("not embedded".into())
+            }
         })
     }
 }
@@ -497,22 +611,37 @@ mod tests {
         assert_eq!(scene.triangles.len(), 32);
         let cam = scene.camera.expect("camera");
         assert_eq!(cam.pos, Vec3::new(278.0, 273.0, -800.0));
-        let light = scene.objects.iter().find(|o| o.name == "light").expect("light");
+        let light = scene
+            .objects
+            .iter()
+            .find(|o| o.name == "light")
+            .expect("light");
         assert_eq!(light.emission, Vec3::new(17.0, 12.0, 4.0));
     }
 
     #[test]
     fn errors_name_the_line() {
         let bad = "mtllib x.mtl\nv 0 0 0\nv 1 nan 0\n";
-        assert!(matches!(load_obj("s.obj", bad, &lib), Err(SceneError::BadNumber { line: 3, .. })));
+        assert!(matches!(
+            load_obj("s.obj", bad, &lib),
+            Err(SceneError::BadNumber { line: 3, .. })
+        ));
         let out = "mtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n";
         assert!(matches!(
             load_obj("s.obj", out, &lib),
-            Err(SceneError::FaceIndexOutOfRange { line: 5, index: 4, count: 3, .. })
+            Err(SceneError::FaceIndexOutOfRange {
+                line: 5,
+                index: 4,
+                count: 3,
+                ..
+            })
         ));
         let missing = "v 0 0 0\nmtllib nope.mtl\n";
         let err = load_obj("s.obj", missing, &|_| Err("no such file".into()));
-        assert!(matches!(err, Err(SceneError::MissingMaterialLibrary { line: 2, .. })));
+        assert!(matches!(
+            err,
+            Err(SceneError::MissingMaterialLibrary { line: 2, .. })
+        ));
     }
 
     #[test]
@@ -526,6 +655,9 @@ mod tests {
     #[test]
     fn no_emitters_is_an_error() {
         let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-        assert!(matches!(load_obj("s.obj", text, &lib), Err(SceneError::NoEmitters { .. })));
+        assert!(matches!(
+            load_obj("s.obj", text, &lib),
+            Err(SceneError::NoEmitters { .. })
+        ));
     }
 }

@@ -36,19 +36,36 @@ impl std::str::FromStr for Until {
     type Err = String;
     /// Parses `unshot=0.001`, `shots=N` or `time=S`.
     fn from_str(s: &str) -> Result<Self, String> {
-        let (key, value) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected unshot=F, shots=N or time=S"))?;
+        let (key, value) = s
+            .split_once('=')
+            .ok_or_else(|| format!("`{s}`: expected unshot=F, shots=N or time=S"))?;
         let bad = |_| format!("`{value}` is not a valid number for `{key}`");
         match key {
-            "unshot" => value.parse::<f64>().map_err(bad).and_then(|v| finite_non_negative(v).map(Until::Unshot)),
-            "shots" => value.parse::<u64>().map(Until::Shots).map_err(|_| format!("`{value}` is not a shot count")),
-            "time" => value.parse::<f64>().map_err(bad).and_then(|v| finite_non_negative(v).map(Until::Seconds)),
-            _ => Err(format!("unknown stopping rule `{key}` (expected unshot, shots or time)")),
+            "unshot" => value
+                .parse::<f64>()
+                .map_err(bad)
+                .and_then(|v| finite_non_negative(v).map(Until::Unshot)),
+            "shots" => value
+                .parse::<u64>()
+                .map(Until::Shots)
+                .map_err(|_| format!("`{value}` is not a shot count")),
+            "time" => value
+                .parse::<f64>()
+                .map_err(bad)
+                .and_then(|v| finite_non_negative(v).map(Until::Seconds)),
+            _ => Err(format!(
+                "unknown stopping rule `{key}` (expected unshot, shots or time)"
+            )),
         }
     }
 }
 
 fn finite_non_negative(v: f64) -> Result<f64, String> {
-    if v.is_finite() && v >= 0.0 { Ok(v) } else { Err(format!("{v} must be a finite number >= 0")) }
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{v} must be a finite number >= 0"))
+    }
 }
 
 /// Adaptive subdivision settings.
@@ -120,7 +137,11 @@ impl Accounts {
         (0..3)
             .map(|c| {
                 let e = self.emitted[c];
-                if e == 0.0 { 0.0 } else { (e - self.absorbed[c] - self.escaped[c] - self.unshot[c]).abs() / e }
+                if e == 0.0 {
+                    0.0
+                } else {
+                    (e - self.absorbed[c] - self.escaped[c] - self.unshot[c]).abs() / e
+                }
             })
             .fold(0.0, f64::max)
     }
@@ -189,12 +210,18 @@ impl<'a> Solver<'a> {
         let tris: Vec<_> = scene.triangles.iter().map(|t| t.tri).collect();
         let octree = Octree::build(&tris, OctreeConfig::default());
         let patch_area: Vec<f64> = mesh.patches.iter().map(|t| t.area() as f64).collect();
-        let element_area = mesh.elements.iter().map(|e| mesh.tri(e).area() as f64).collect();
+        let element_area = mesh
+            .elements
+            .iter()
+            .map(|e| mesh.tri(e).area() as f64)
+            .collect();
         let unshot: Vec<DVec3> = mesh
             .patch_object
             .iter()
             .zip(&patch_area)
-            .map(|(&o, &a)| scene.objects[o as usize].emission.as_dvec3() * std::f64::consts::PI * a)
+            .map(|(&o, &a)| {
+                scene.objects[o as usize].emission.as_dvec3() * std::f64::consts::PI * a
+            })
             .collect();
         let emitted = unshot.iter().fold(DVec3::ZERO, |s, u| s + *u).to_array();
         Solver {
@@ -203,7 +230,11 @@ impl<'a> Solver<'a> {
             mesh,
             octree,
             unshot,
-            accounts: Accounts { emitted, unshot: emitted, ..Accounts::default() },
+            accounts: Accounts {
+                emitted,
+                unshot: emitted,
+                ..Accounts::default()
+            },
             history: Vec::new(),
             stats: SolveStats::default(),
             reference: None,
@@ -248,7 +279,9 @@ impl<'a> Solver<'a> {
 
     /// Shoots the patch with the most unshot power; returns false when nothing is left.
     pub fn shoot_once(&mut self) -> bool {
-        let Some(src) = self.pick_shooter() else { return false };
+        let Some(src) = self.pick_shooter() else {
+            return false;
+        };
         let shot = self.unshot[src] * self.config.overshoot;
         self.unshot[src] -= shot;
         let delta_b = (shot / self.patch_area[src]).as_vec3();
@@ -285,7 +318,14 @@ impl<'a> Solver<'a> {
             .enumerate()
             .map(|(i, chunk)| {
                 let mut out = vec![0.0; chunk.len()];
-                let stats = shoot_batch(octree, &source, chunk, &config, seed.wrapping_add(i as u64 * 7919), &mut out);
+                let stats = shoot_batch(
+                    octree,
+                    &source,
+                    chunk,
+                    &config,
+                    seed.wrapping_add(i as u64 * 7919),
+                    &mut out,
+                );
                 (out, stats)
             })
             .collect();
@@ -302,13 +342,15 @@ impl<'a> Solver<'a> {
     /// Adaptive subdivision for this shot: split edges whose form factors differ strongly and
     /// are not linear along the edge. Returns the factors extended to the new sample points.
     fn refine(&mut self, src: usize, mut factors: Vec<f32>, shot: DVec3) -> Vec<f32> {
-        let Some(adapt) = self.config.adapt else { return factors };
+        let Some(adapt) = self.config.adapt else {
+            return factors;
+        };
         let emitted: f64 = self.accounts.emitted.iter().sum();
         if shot.abs().element_sum() < adapt.min_shot_power * emitted {
             return factors;
         }
         let budget = adapt.max_vertices.max(self.mesh.vertices.len());
-        let db = (shot / self.patch_area[src]).as_vec3().element_sum() as f32;
+        let db = (shot / self.patch_area[src]).as_vec3().element_sum();
         for _ in 0..adapt.passes {
             let mut candidates = self.refinement_candidates(&factors, db, &adapt);
             let room = budget.saturating_sub(self.mesh.vertices.len());
@@ -316,7 +358,10 @@ impl<'a> Solver<'a> {
                 break;
             }
             candidates.truncate(room);
-            let mids: Vec<SamplePoint> = candidates.iter().map(|&(a, b)| self.midpoint(a, b)).collect();
+            let mids: Vec<SamplePoint> = candidates
+                .iter()
+                .map(|&(a, b)| self.midpoint(a, b))
+                .collect();
             let mid_f = self.shoot_points(src, &mids);
             let mut split = 0;
             for (&(a, b), (m, fm)) in candidates.iter().zip(mids.iter().zip(mid_f)) {
@@ -339,7 +384,12 @@ impl<'a> Solver<'a> {
     /// Edges longer than twice the minimum whose two ends receive from this shot amounts that
     /// differ by more than `difference` times the local irradiance (including this shot),
     /// steepest first.
-    fn refinement_candidates(&self, factors: &[f32], db: f32, adapt: &AdaptConfig) -> Vec<(u32, u32)> {
+    fn refinement_candidates(
+        &self,
+        factors: &[f32],
+        db: f32,
+        adapt: &AdaptConfig,
+    ) -> Vec<(u32, u32)> {
         let mut scored: Vec<(f32, (u32, u32))> = self
             .mesh
             .edge_list()
@@ -347,7 +397,8 @@ impl<'a> Solver<'a> {
             .filter_map(|(a, b)| {
                 let (fa, fb) = (factors[a as usize], factors[b as usize]);
                 let local = self.local_irradiance(a, b) + db * fa.max(fb);
-                let len = (self.mesh.vertices[a as usize].pos - self.mesh.vertices[b as usize].pos).length();
+                let len = (self.mesh.vertices[a as usize].pos - self.mesh.vertices[b as usize].pos)
+                    .length();
                 let steep = db * (fa - fb).abs() / local.max(f32::MIN_POSITIVE);
                 (len > 2.0 * adapt.min_edge && steep > adapt.difference).then_some((steep, (a, b)))
             })
@@ -358,7 +409,9 @@ impl<'a> Solver<'a> {
 
     /// The larger irradiance (channels summed) gathered so far at the ends of an edge.
     fn local_irradiance(&self, a: u32, b: u32) -> f32 {
-        self.irradiance[a as usize].element_sum().max(self.irradiance[b as usize].element_sum())
+        self.irradiance[a as usize]
+            .element_sum()
+            .max(self.irradiance[b as usize].element_sum())
     }
 
     /// Adds the sample point `m` (with this shot's factor `fm`) on edge `(a, b)` and splits it.
@@ -375,7 +428,10 @@ impl<'a> Solver<'a> {
     }
 
     fn midpoint(&self, a: u32, b: u32) -> SamplePoint {
-        let (va, vb) = (self.mesh.vertices[a as usize], self.mesh.vertices[b as usize]);
+        let (va, vb) = (
+            self.mesh.vertices[a as usize],
+            self.mesh.vertices[b as usize],
+        );
         SamplePoint {
             pos: ((va.pos + vb.pos) * 0.5).to_array(),
             normal: (va.normal + vb.normal).normalize_or(va.normal).to_array(),
@@ -387,7 +443,10 @@ impl<'a> Solver<'a> {
     /// the elements `shrunk`.
     fn fix_split_areas(&mut self, before: usize, shrunk: &[u32]) {
         self.element_area.resize(self.mesh.elements.len(), 0.0);
-        let touched = shrunk.iter().map(|&i| i as usize).chain(before..self.mesh.elements.len());
+        let touched = shrunk
+            .iter()
+            .map(|&i| i as usize)
+            .chain(before..self.mesh.elements.len());
         for i in touched {
             self.element_area[i] = self.mesh.tri(&self.mesh.elements[i]).area() as f64;
         }
@@ -448,7 +507,9 @@ impl<'a> Solver<'a> {
             out[e.object as usize].0 += a;
             out[e.object as usize].1 += mean * a;
         }
-        out.into_iter().map(|(a, s)| (a, if a > 0.0 { s / a } else { DVec3::ZERO })).collect()
+        out.into_iter()
+            .map(|(a, s)| (a, if a > 0.0 { s / a } else { DVec3::ZERO }))
+            .collect()
     }
 
     /// Returns the area-weighted RMS of `|B - B_ref|` over objects with a reference, relative to

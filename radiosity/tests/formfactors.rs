@@ -38,20 +38,31 @@ fn parallel(a: f32, b: f32, c: f32, config: &FormFactorConfig) -> f64 {
 }
 
 fn within(value: f64, exact: f64, tol: f64) {
-    assert!(((value - exact) / exact).abs() < tol, "{value} vs exact {exact} ({:.3}%)", 100.0 * (value / exact - 1.0));
+    assert!(
+        ((value - exact) / exact).abs() < tol,
+        "{value} vs exact {exact} ({:.3}%)",
+        100.0 * (value / exact - 1.0)
+    );
 }
 
 #[test]
 fn opposed_parallel_rectangles_wallace_only() {
     // Pure Wallace estimator (never analytic) with enough rays.
-    let config = FormFactorConfig { rays: 256, max_disc_bias: f32::INFINITY, offset: 0.0 };
+    let config = FormFactorConfig {
+        rays: 256,
+        max_disc_bias: f32::INFINITY,
+        offset: 0.0,
+    };
     within(parallel(1.0, 1.0, 1.0, &config), 0.199825, 0.005);
     within(parallel(1.0, 1.0, 2.0, &config), 0.068590, 0.005);
 }
 
 #[test]
 fn opposed_parallel_rectangles_with_the_analytic_extension() {
-    let config = FormFactorConfig { rays: 16, ..FormFactorConfig::default() };
+    let config = FormFactorConfig {
+        rays: 16,
+        ..FormFactorConfig::default()
+    };
     within(parallel(1.0, 1.0, 1.0, &config), 0.199825, 0.005);
     within(parallel(1.0, 1.0, 0.5, &config), 0.415253, 0.005);
     within(parallel(2.0, 1.0, 1.0, &config), 0.285875, 0.005);
@@ -64,12 +75,18 @@ fn perpendicular(w: f32, h: f32, l: f32, config: &FormFactorConfig) -> (f64, f64
     let floor = rect(Vec3::ZERO, Vec3::Z * l, Vec3::X * w);
     let wall = rect(Vec3::ZERO, Vec3::Y * h, Vec3::Z * l);
     assert!(floor[0].normal().y > 0.99 && wall[0].normal().x > 0.99);
-    (area_to_area(floor, &wall, 64, config), area_to_area(wall, &floor, 64, config))
+    (
+        area_to_area(floor, &wall, 64, config),
+        area_to_area(wall, &floor, 64, config),
+    )
 }
 
 #[test]
 fn perpendicular_rectangles_sharing_an_edge() {
-    let config = FormFactorConfig { rays: 16, ..FormFactorConfig::default() };
+    let config = FormFactorConfig {
+        rays: 16,
+        ..FormFactorConfig::default()
+    };
     within(perpendicular(1.0, 1.0, 1.0, &config).0, 0.200044, 0.005);
     within(perpendicular(1.0, 2.0, 1.0, &config).0, 0.232853, 0.005);
     within(perpendicular(2.0, 1.0, 1.0, &config).0, 0.116426, 0.005);
@@ -79,7 +96,10 @@ fn perpendicular_rectangles_sharing_an_edge() {
 
 #[test]
 fn reciprocity_on_simple_pairs() {
-    let config = FormFactorConfig { rays: 16, ..FormFactorConfig::default() };
+    let config = FormFactorConfig {
+        rays: 16,
+        ..FormFactorConfig::default()
+    };
     // A1 F12 = A2 F21 for floor 1×1 and wall 2×1 sharing an edge.
     let (f12, f21) = perpendicular(1.0, 2.0, 1.0, &config);
     within(1.0 * f12, 2.0 * f21, 0.005);
@@ -90,7 +110,11 @@ fn reciprocity_on_simple_pairs() {
 #[test]
 fn differential_area_to_rectangle_and_disc() {
     // (4) corner of a unit square at distance 1: 0.138532; centred: 0.239456; (3) disc R = h: 0.5.
-    let config = FormFactorConfig { rays: 1024, max_disc_bias: f32::INFINITY, offset: 0.0 };
+    let config = FormFactorConfig {
+        rays: 1024,
+        max_disc_bias: f32::INFINITY,
+        offset: 0.0,
+    };
     let mut rng = Pcg32::new(11, 1);
     let mut s = Vec::new();
     let mut total = |tris: &[Tri]| {
@@ -115,7 +139,11 @@ fn differential_area_to_rectangle_and_disc() {
             Tri::new(Vec3::Y, p(a0), p(a1))
         })
         .collect();
-    let exact_poly = point_polygon(Vec3::ZERO, Vec3::Y, &fan.iter().map(|t| t.v[1]).collect::<Vec<_>>());
+    let exact_poly = point_polygon(
+        Vec3::ZERO,
+        Vec3::Y,
+        &fan.iter().map(|t| t.v[1]).collect::<Vec<_>>(),
+    );
     within(exact_poly as f64, 0.5, 0.001);
     within(total(&fan), 0.5, 0.005);
 }
@@ -135,7 +163,18 @@ fn near_field_needs_the_analytic_form() {
             })
             .sum::<f64>()
     };
-    let wallace = eval(FormFactorConfig { rays: 16, max_disc_bias: f32::INFINITY, offset: 0.0 });
+    let wallace = eval(FormFactorConfig {
+        rays: 16,
+        max_disc_bias: f32::INFINITY,
+        offset: 0.0,
+    });
     assert!(wallace < 0.9, "{wallace}");
-    within(eval(FormFactorConfig { rays: 16, ..FormFactorConfig::default() }), 0.968340, 0.001);
+    within(
+        eval(FormFactorConfig {
+            rays: 16,
+            ..FormFactorConfig::default()
+        }),
+        0.968340,
+        0.001,
+    );
 }

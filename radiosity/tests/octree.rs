@@ -24,8 +24,16 @@ fn octree_equals_brute_force_between_random_surface_points() {
         let o = a + tris[i].normal() * 1e-3;
         let d = b - o;
         let expected = occluded_brute_force(&tris, o, d, 0.0, 0.999);
-        assert_eq!(tree.occluded(o, d, 0.0, 0.999, Traversal::Samet), expected, "{o} -> {b}");
-        assert_eq!(tree.occluded(o, d, 0.0, 0.999, Traversal::Glassner), expected, "{o} -> {b}");
+        assert_eq!(
+            tree.occluded(o, d, 0.0, 0.999, Traversal::Samet),
+            expected,
+            "{o} -> {b}"
+        );
+        assert_eq!(
+            tree.occluded(o, d, 0.0, 0.999, Traversal::Glassner),
+            expected,
+            "{o} -> {b}"
+        );
         occluded += expected as u32;
     }
     // The set mixes both answers (the blocks occlude a good share of the pairs).
@@ -35,11 +43,25 @@ fn octree_equals_brute_force_between_random_surface_points() {
 #[test]
 fn first_hit_equals_brute_force_nearest() {
     let tris = cornell::grid_triangles(4).expect("cornell");
-    let tree = Octree::build(&tris, OctreeConfig { max_leaf: 4, max_depth: 10 });
+    let tree = Octree::build(
+        &tris,
+        OctreeConfig {
+            max_leaf: 4,
+            max_depth: 10,
+        },
+    );
     let mut rng = Pcg32::new(9, 2);
     for _ in 0..2000 {
-        let o = Vec3::new(rng.next_f32() * 556.0, rng.next_f32() * 548.0, rng.next_f32() * 559.0);
-        let d = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * 2000.0;
+        let o = Vec3::new(
+            rng.next_f32() * 556.0,
+            rng.next_f32() * 548.0,
+            rng.next_f32() * 559.0,
+        );
+        let d = Vec3::new(
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+        ) * 2000.0;
         let brute = tris
             .iter()
             .enumerate()
@@ -64,7 +86,11 @@ fn rays_leaving_a_patch_never_hit_it() {
         let n = tris[i].normal();
         // A direction in the patch's front hemisphere, from just above the patch (lifted 1e-3 mm
         // along the normal, as the form-factor kernel lifts its ray origins).
-        let mut d = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5);
+        let mut d = Vec3::new(
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+        );
         if d.dot(n) < 0.0 {
             d = -d;
         }
@@ -86,8 +112,16 @@ fn axis_parallel_and_degenerate_rays_terminate() {
     let o = Vec3::new(150.0, 450.0, 300.0);
     for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
         let expected = d != -Vec3::Z;
-        assert_eq!(tree.occluded(o, d * 1000.0, 0.0, 1.0, Traversal::Samet), expected, "{d}");
-        assert_eq!(tree.occluded(o, d * 1000.0, 0.0, 1.0, Traversal::Glassner), expected, "{d}");
+        assert_eq!(
+            tree.occluded(o, d * 1000.0, 0.0, 1.0, Traversal::Samet),
+            expected,
+            "{d}"
+        );
+        assert_eq!(
+            tree.occluded(o, d * 1000.0, 0.0, 1.0, Traversal::Glassner),
+            expected,
+            "{d}"
+        );
     }
     assert!(!tree.occluded(o, Vec3::ZERO, 0.0, 1.0, Traversal::Samet));
     let outside = Vec3::new(-1e4, -1e4, -1e4);

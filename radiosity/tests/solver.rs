@@ -21,21 +21,48 @@ fn closed_furnace_box_converges_to_e_over_one_minus_rho() {
     // Every face emits E = 1 (Ke = 1/π) with ρ = 0.5: B = 2 everywhere.
     for rho in [0.5f32, 0.8] {
         let scene = common::closed_box(Vec3::ZERO, Vec3::ONE, rho, |_| std::f32::consts::FRAC_1_PI);
-        let config = SolverConfig { until: Until::Unshot(1e-5), ..SolverConfig::default() };
-        let solver = solve(&scene, MeshConfig { patch_size: 0.4, element_size: 0.2 }, config);
+        let config = SolverConfig {
+            until: Until::Unshot(1e-5),
+            ..SolverConfig::default()
+        };
+        let solver = solve(
+            &scene,
+            MeshConfig {
+                patch_size: 0.4,
+                element_size: 0.2,
+            },
+            config,
+        );
         let expected = 1.0 / (1.0 - rho as f64);
         for (i, (_, b)) in solver.object_means().iter().enumerate() {
             for c in b.to_array() {
-                assert!((c / expected - 1.0).abs() < 0.005, "rho {rho} face {i}: B = {c}, expected {expected}");
+                assert!(
+                    (c / expected - 1.0).abs() < 0.005,
+                    "rho {rho} face {i}: B = {c}, expected {expected}"
+                );
             }
         }
-        assert!(solver.accounts.balance_error() < 1e-9, "{:?}", solver.accounts);
+        assert!(
+            solver.accounts.balance_error() < 1e-9,
+            "{:?}",
+            solver.accounts
+        );
     }
 }
 
 fn light_patches(solver: &Solver) -> u64 {
-    let light = solver.scene.objects.iter().position(|o| o.name == "light").expect("light") as u32;
-    solver.mesh.patch_object.iter().filter(|&&o| o == light).count() as u64
+    let light = solver
+        .scene
+        .objects
+        .iter()
+        .position(|o| o.name == "light")
+        .expect("light") as u32;
+    solver
+        .mesh
+        .patch_object
+        .iter()
+        .filter(|&&o| o == light)
+        .count() as u64
 }
 
 #[test]
@@ -43,57 +70,131 @@ fn cornell_floor_centre_direct_irradiance() {
     // Blocks removed; after every light patch has shot once, H = B / ρ at (278, 0, 279.6) must be
     // (0.7590, 0.5358, 0.1786) within 1% (notes §1c; Mitsuba direct-only agrees).
     let scene = cornell::load(false).expect("scene");
-    let mesh = MeshConfig { patch_size: 120.0, element_size: 30.0 };
-    let probe = Probe { pos: Vec3::new(278.0, 0.0, 279.6), normal: Vec3::Y };
-    let mut solver = Solver::new(&scene, Mesh::from_scene(&scene, mesh), SolverConfig::default());
+    let mesh = MeshConfig {
+        patch_size: 120.0,
+        element_size: 30.0,
+    };
+    let probe = Probe {
+        pos: Vec3::new(278.0, 0.0, 279.6),
+        normal: Vec3::Y,
+    };
+    let mut solver = Solver::new(
+        &scene,
+        Mesh::from_scene(&scene, mesh),
+        SolverConfig::default(),
+    );
     for _ in 0..light_patches(&solver) {
         assert!(solver.shoot_once());
     }
     let b = evaluate(&solver, &probe).expect("probe on the floor");
-    let floor = scene.objects.iter().find(|o| o.name == "floor").expect("floor");
+    let floor = scene
+        .objects
+        .iter()
+        .find(|o| o.name == "floor")
+        .expect("floor");
     let h = b / floor.reflectance;
     let expected = Vec3::new(0.7590, 0.5358, 0.1786);
     for c in 0..3 {
-        assert!((h[c] / expected[c] - 1.0).abs() < 0.01, "H = {h}, expected {expected}");
+        assert!(
+            (h[c] / expected[c] - 1.0).abs() < 0.01,
+            "H = {h}, expected {expected}"
+        );
     }
 }
 
 #[test]
 fn cornell_box_energy_balance_and_convergence() {
     let scene = cornell::load(true).expect("scene");
-    let adapt =
-        AdaptConfig { difference: 0.3, nonlinearity: 0.1, min_edge: 5.0, min_shot_power: 0.01, passes: 2, max_vertices: 5000 };
+    let adapt = AdaptConfig {
+        difference: 0.3,
+        nonlinearity: 0.1,
+        min_edge: 5.0,
+        min_shot_power: 0.01,
+        passes: 2,
+        max_vertices: 5000,
+    };
     let config = SolverConfig {
-        form_factor: FormFactorConfig { rays: 4, ..FormFactorConfig::default() },
+        form_factor: FormFactorConfig {
+            rays: 4,
+            ..FormFactorConfig::default()
+        },
         adapt: Some(adapt),
         until: Until::Unshot(0.1),
         ..SolverConfig::default()
     };
-    let solver = solve(&scene, MeshConfig { patch_size: 200.0, element_size: 80.0 }, config);
+    let solver = solve(
+        &scene,
+        MeshConfig {
+            patch_size: 200.0,
+            element_size: 80.0,
+        },
+        config,
+    );
     assert!(solver.unshot_fraction() <= 0.1);
-    assert!(solver.accounts.balance_error() < 1e-9, "{:?}", solver.accounts);
-    assert!(solver.stats.adaptive_splits > 0, "the block shadows must be refined");
+    assert!(
+        solver.accounts.balance_error() < 1e-9,
+        "{:?}",
+        solver.accounts
+    );
+    assert!(
+        solver.stats.adaptive_splits > 0,
+        "the block shadows must be refined"
+    );
     // The box is open at the front: some power escapes, most is absorbed.
     let a = solver.accounts;
     for c in 0..3 {
-        assert!(a.escaped[c] > 0.05 * a.emitted[c] && a.absorbed[c] > 0.5 * a.emitted[c], "{a:?}");
+        assert!(
+            a.escaped[c] > 0.05 * a.emitted[c] && a.absorbed[c] > 0.5 * a.emitted[c],
+            "{a:?}"
+        );
     }
     // Colour bleeding: the red wall is red, the green wall green.
     let means = solver.object_means();
-    let by = |n: &str| means[scene.objects.iter().position(|o| o.name == n).expect("object")].1;
+    let by = |n: &str| {
+        means[scene
+            .objects
+            .iter()
+            .position(|o| o.name == n)
+            .expect("object")]
+        .1
+    };
     assert!(by("red_wall").x > 3.0 * by("red_wall").y);
     assert!(by("green_wall").y > 2.0 * by("green_wall").x);
 }
 
 #[test]
 fn overshooting_converges_with_fewer_shots() {
-    let scene = common::closed_box(Vec3::ZERO, Vec3::ONE, 0.9, |f| if f == 3 { 1.0 } else { 0.0 });
-    let mesh = MeshConfig { patch_size: 0.5, element_size: 0.5 };
-    let plain = solve(&scene, mesh, SolverConfig { until: Until::Unshot(1e-3), ..SolverConfig::default() });
-    let over = SolverConfig { until: Until::Unshot(1e-3), overshoot: 1.5, ..SolverConfig::default() };
+    let scene = common::closed_box(
+        Vec3::ZERO,
+        Vec3::ONE,
+        0.9,
+        |f| if f == 3 { 1.0 } else { 0.0 },
+    );
+    let mesh = MeshConfig {
+        patch_size: 0.5,
+        element_size: 0.5,
+    };
+    let plain = solve(
+        &scene,
+        mesh,
+        SolverConfig {
+            until: Until::Unshot(1e-3),
+            ..SolverConfig::default()
+        },
+    );
+    let over = SolverConfig {
+        until: Until::Unshot(1e-3),
+        overshoot: 1.5,
+        ..SolverConfig::default()
+    };
     let over = solve(&scene, mesh, over);
     assert!(over.accounts.balance_error() < 1e-9);
-    assert!(over.stats.shots < plain.stats.shots, "{} vs {}", over.stats.shots, plain.stats.shots);
+    assert!(
+        over.stats.shots < plain.stats.shots,
+        "{} vs {}",
+        over.stats.shots,
+        plain.stats.shots
+    );
 }
 
 fn load_scene_file(obj: &str, name: &str) -> Scene {
@@ -106,13 +207,28 @@ fn stable(obj: &str, name: &str, mesh_fraction: f32, until: Until) -> f64 {
     let scene = load_scene_file(obj, name);
     let d = scene.diagonal();
     let config = SolverConfig {
-        form_factor: FormFactorConfig { rays: 4, offset: d * 1e-6, ..FormFactorConfig::default() },
+        form_factor: FormFactorConfig {
+            rays: 4,
+            offset: d * 1e-6,
+            ..FormFactorConfig::default()
+        },
         until,
         max_shots: 20_000,
         ..SolverConfig::default()
     };
-    let solver = solve(&scene, MeshConfig { patch_size: d * mesh_fraction, element_size: d * mesh_fraction }, config);
-    assert!(solver.accounts.balance_error() < 1e-9, "{name}: {:?}", solver.accounts);
+    let solver = solve(
+        &scene,
+        MeshConfig {
+            patch_size: d * mesh_fraction,
+            element_size: d * mesh_fraction,
+        },
+        config,
+    );
+    assert!(
+        solver.accounts.balance_error() < 1e-9,
+        "{name}: {:?}",
+        solver.accounts
+    );
     for (_, b) in solver.object_means() {
         assert!(b.is_finite() && b.min_element() >= 0.0, "{name}: {b}");
     }
@@ -121,7 +237,12 @@ fn stable(obj: &str, name: &str, mesh_fraction: f32, until: Until) -> f64 {
 
 #[test]
 fn stiff_scene_with_reflectance_near_one_converges() {
-    let f = stable(include_str!("../../scenes/stiff-box.obj"), "stiff-box.obj", 0.3, Until::Unshot(0.01));
+    let f = stable(
+        include_str!("../../scenes/stiff-box.obj"),
+        "stiff-box.obj",
+        0.3,
+        Until::Unshot(0.01),
+    );
     assert!(f <= 0.01);
 }
 
@@ -133,24 +254,49 @@ fn huge_and_tiny_scales_give_the_same_answer() {
     for scene in [&huge, &tiny] {
         let d = scene.diagonal();
         let config = SolverConfig {
-            form_factor: FormFactorConfig { rays: 4, offset: d * 1e-6, ..FormFactorConfig::default() },
+            form_factor: FormFactorConfig {
+                rays: 4,
+                offset: d * 1e-6,
+                ..FormFactorConfig::default()
+            },
             until: Until::Unshot(1e-3),
             ..SolverConfig::default()
         };
-        let solver = solve(scene, MeshConfig { patch_size: d * 0.3, element_size: d * 0.3 }, config);
+        let solver = solve(
+            scene,
+            MeshConfig {
+                patch_size: d * 0.3,
+                element_size: d * 0.3,
+            },
+            config,
+        );
         assert!(solver.accounts.balance_error() < 1e-9);
         // Radiosity does not depend on scale: compare mean B per object.
-        results.push(solver.object_means().iter().map(|(_, b)| *b).collect::<Vec<_>>());
+        results.push(
+            solver
+                .object_means()
+                .iter()
+                .map(|(_, b)| *b)
+                .collect::<Vec<_>>(),
+        );
     }
     // The scales differ by a power of two, so every operation rounds the same way: the answers
     // must agree to rounding, not just roughly.
     for (a, b) in results[0].iter().zip(&results[1]) {
-        assert!((*a - *b).length() <= 1e-6 * a.length().max(1e-9), "{a} vs {b}");
+        assert!(
+            (*a - *b).length() <= 1e-6 * a.length().max(1e-9),
+            "{a} vs {b}"
+        );
     }
 }
 
 #[test]
 fn long_thin_triangles_stay_stable() {
-    let f = stable(include_str!("../../scenes/slivers.obj"), "slivers.obj", 10.0, Until::Unshot(0.05));
+    let f = stable(
+        include_str!("../../scenes/slivers.obj"),
+        "slivers.obj",
+        10.0,
+        Until::Unshot(0.05),
+    );
     assert!(f <= 0.05);
 }

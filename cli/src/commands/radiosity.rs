@@ -39,15 +39,15 @@ pub struct Args {
     #[arg(long)]
     pub probe: Option<PathBuf>,
     /// Shadow rays per form factor (time against accuracy of shadows).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 8)]
     pub rays: u32,
     /// Solver.
     #[arg(long, value_enum, default_value = "reference")]
     pub solver: SolverKind,
-    /// Longest patch (shooter) edge; default: scene diagonal / 6.
+    /// Longest patch (shooter) edge; default: scene diagonal / 4.
     #[arg(long)]
     pub patch_size: Option<f32>,
-    /// Longest element edge; default: scene diagonal / 24.
+    /// Longest element edge; default: scene diagonal / 20.
     #[arg(long)]
     pub element_size: Option<f32>,
     /// Turn adaptive subdivision off.
@@ -60,7 +60,7 @@ pub struct Args {
     #[arg(long, default_value_t = 0.1)]
     pub adapt_nonlinearity: f32,
     /// Adaptive subdivision stops adding sample points beyond this many.
-    #[arg(long, default_value_t = 20_000)]
+    #[arg(long, default_value_t = 8_000)]
     pub max_vertices: usize,
     /// Overshooting factor (1 = none).
     #[arg(long, default_value_t = 1.0)]
@@ -85,13 +85,17 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     let t1 = Instant::now();
     let diag = scene.diagonal();
     let mesh_config = MeshConfig {
-        patch_size: args.patch_size.unwrap_or(diag / 6.0),
-        element_size: args.element_size.unwrap_or(diag / 24.0),
+        patch_size: args.patch_size.unwrap_or(diag / 4.0),
+        element_size: args.element_size.unwrap_or(diag / 20.0),
     };
     let mesh = Mesh::from_scene(&scene, mesh_config);
     let mesh_time = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let mut solver = Solver::new(&scene, mesh, solver_config(&args, diag, mesh_config.element_size));
+    let mut solver = Solver::new(
+        &scene,
+        mesh,
+        solver_config(&args, diag, mesh_config.element_size),
+    );
     let octree_time = t2.elapsed().as_secs_f64();
     if let Some(path) = &args.reference {
         let text = read(path)?;

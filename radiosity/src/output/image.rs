@@ -14,7 +14,12 @@ pub fn camera_for(solver: &Solver) -> Camera {
         let (lo, hi) = solver.scene.bounds();
         let centre = (lo + hi) * 0.5;
         let size = (hi - lo).max_element();
-        Camera { pos: centre - Vec3::Z * (size * 2.2), dir: Vec3::Z, up: Vec3::Y, fov_deg: 40.0 }
+        Camera {
+            pos: centre - Vec3::Z * (size * 2.2),
+            dir: Vec3::Z,
+            up: Vec3::Y,
+            fov_deg: 40.0,
+        }
     })
 }
 
@@ -51,24 +56,41 @@ pub fn render(solver: &Solver, camera: &Camera, width: u32, height: u32, exposur
         raster_triangle(&s, &b, w, h, &mut depth, &mut colour);
     }
     let scale = exposure / std::f32::consts::PI;
-    colour.iter().flat_map(|c| (*c * scale).to_array().map(srgb_byte)).collect()
+    colour
+        .iter()
+        .flat_map(|c| (*c * scale).to_array().map(srgb_byte))
+        .collect()
 }
 
 /// Fills one screen-space triangle with interpolated colours where it is nearest.
-fn raster_triangle(s: &[Vec3; 3], c: &[Vec3; 3], w: usize, h: usize, depth: &mut [f32], colour: &mut [Vec3]) {
+fn raster_triangle(
+    s: &[Vec3; 3],
+    c: &[Vec3; 3],
+    w: usize,
+    h: usize,
+    depth: &mut [f32],
+    colour: &mut [Vec3],
+) {
     let area = edge(s[0], s[1], s[2]);
     if area.abs() < 1e-12 {
         return;
     }
     let lo = s[0].min(s[1]).min(s[2]).max(Vec3::ZERO);
-    let hi = s[0].max(s[1]).max(s[2]).min(Vec3::new(w as f32 - 1.0, h as f32 - 1.0, 0.0));
+    let hi = s[0]
+        .max(s[1])
+        .max(s[2])
+        .min(Vec3::new(w as f32 - 1.0, h as f32 - 1.0, 0.0));
     for y in lo.y.floor() as usize..=hi.y.max(0.0).ceil() as usize {
         for x in lo.x.floor() as usize..=hi.x.max(0.0).ceil() as usize {
             if x >= w || y >= h {
                 continue;
             }
             let p = Vec3::new(x as f32 + 0.5, y as f32 + 0.5, 0.0);
-            let b = [edge(s[1], s[2], p) / area, edge(s[2], s[0], p) / area, edge(s[0], s[1], p) / area];
+            let b = [
+                edge(s[1], s[2], p) / area,
+                edge(s[2], s[0], p) / area,
+                edge(s[0], s[1], p) / area,
+            ];
             if b.iter().any(|&v| v < -1e-6) {
                 continue;
             }
@@ -87,7 +109,16 @@ fn edge(a: Vec3, b: Vec3, p: Vec3) -> f32 {
 }
 
 /// Renders and encodes `image.png`.
-pub fn image_png(solver: &Solver, width: u32, height: u32, exposure: f32) -> Result<Vec<u8>, OutputError> {
+pub fn image_png(
+    solver: &Solver,
+    width: u32,
+    height: u32,
+    exposure: f32,
+) -> Result<Vec<u8>, OutputError> {
     let camera = camera_for(solver);
-    encode_png(&render(solver, &camera, width, height, exposure), width, height)
+    encode_png(
+        &render(solver, &camera, width, height, exposure),
+        width,
+        height,
+    )
 }

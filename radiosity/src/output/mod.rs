@@ -43,15 +43,25 @@ pub fn encode_png(rgb: &[u8], width: u32, height: u32) -> Result<Vec<u8>, Output
     let mut encoder = png::Encoder::new(&mut bytes, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(|e| OutputError::Png(e.to_string()))?;
-    writer.write_image_data(rgb).map_err(|e| OutputError::Png(e.to_string()))?;
-    writer.finish().map_err(|e| OutputError::Png(e.to_string()))?;
+    let mut writer = encoder
+        .write_header()
+        .map_err(|e| OutputError::Png(e.to_string()))?;
+    writer
+        .write_image_data(rgb)
+        .map_err(|e| OutputError::Png(e.to_string()))?;
+    writer
+        .finish()
+        .map_err(|e| OutputError::Png(e.to_string()))?;
     Ok(bytes)
 }
 
 /// Maps a linear value to an sRGB byte (IEC 61966-2-1 transfer function, clamped).
 pub fn srgb_byte(linear: f32) -> u8 {
     let x = linear.clamp(0.0, 1.0);
-    let s = if x <= 0.0031308 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    let s = if x <= 0.0031308 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
     (s * 255.0 + 0.5) as u8
 }

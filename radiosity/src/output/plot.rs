@@ -33,14 +33,25 @@ pub fn register_system_font() -> bool {
 pub fn convergence_csv(history: &[ConvergencePoint], rms: &[Option<f64>]) -> String {
     let mut s = String::from("shots,seconds,unshot_fraction,rms_error,vertices\n");
     for (i, p) in history.iter().enumerate() {
-        let r = rms.get(i).copied().flatten().map_or(String::new(), |r| r.to_string());
-        s += &format!("{},{:.6},{:.9e},{r},{}\n", p.shots, p.seconds, p.unshot_fraction, p.vertices);
+        let r = rms
+            .get(i)
+            .copied()
+            .flatten()
+            .map_or(String::new(), |r| r.to_string());
+        s += &format!(
+            "{},{:.6},{:.9e},{r},{}\n",
+            p.shots, p.seconds, p.unshot_fraction, p.vertices
+        );
     }
     s
 }
 
 /// Draws `convergence.png` (two panels: against shots, against seconds).
-pub fn convergence_png(history: &[ConvergencePoint], rms: &[Option<f64>], labels: bool) -> Result<Vec<u8>, OutputError> {
+pub fn convergence_png(
+    history: &[ConvergencePoint],
+    rms: &[Option<f64>],
+    labels: bool,
+) -> Result<Vec<u8>, OutputError> {
     let (w, h) = (1200u32, 500u32);
     let mut buf = vec![255u8; (w * h * 3) as usize];
     {
@@ -50,7 +61,8 @@ pub fn convergence_png(history: &[ConvergencePoint], rms: &[Option<f64>], labels
         let secs: Vec<f64> = history.iter().map(|p| p.seconds).collect();
         panel(&panels[0], &shots, history, rms, "shots", labels)?;
         panel(&panels[1], &secs, history, rms, "seconds", labels)?;
-        root.present().map_err(|e| OutputError::Plot(e.to_string()))?;
+        root.present()
+            .map_err(|e| OutputError::Plot(e.to_string()))?;
     }
     encode_png(&buf, w, h)
 }
@@ -65,14 +77,22 @@ fn panel<DB: DrawingBackend>(
 ) -> Result<(), OutputError> {
     let err = |e: &dyn std::fmt::Display| OutputError::Plot(e.to_string());
     let x_max = xs.last().copied().unwrap_or(1.0).max(1e-9);
-    let ys = history.iter().map(|p| p.unshot_fraction).chain(rms.iter().flatten().copied());
+    let ys = history
+        .iter()
+        .map(|p| p.unshot_fraction)
+        .chain(rms.iter().flatten().copied());
     let y_min = ys.filter(|y| *y > 0.0).fold(1.0f64, f64::min).max(1e-12) * 0.5;
     let mut builder = ChartBuilder::on(area);
     builder.margin(15);
     if labels {
-        builder.caption(format!("convergence against {x_name}"), ("sans-serif", 20)).x_label_area_size(40).y_label_area_size(70);
+        builder
+            .caption(format!("convergence against {x_name}"), ("sans-serif", 20))
+            .x_label_area_size(40)
+            .y_label_area_size(70);
     }
-    let mut chart = builder.build_cartesian_2d(0.0..x_max, (y_min..2.0).log_scale()).map_err(|e| err(&e))?;
+    let mut chart = builder
+        .build_cartesian_2d(0.0..x_max, (y_min..2.0).log_scale())
+        .map_err(|e| err(&e))?;
     let mut mesh = chart.configure_mesh();
     if labels {
         mesh.x_desc(x_name).y_desc("fraction (log)");
@@ -80,20 +100,39 @@ fn panel<DB: DrawingBackend>(
         mesh.x_labels(0).y_labels(0);
     }
     mesh.draw().map_err(|e| err(&e))?;
-    let unshot = xs.iter().zip(history).map(|(&x, p)| (x, p.unshot_fraction.max(y_min)));
-    let series = chart.draw_series(LineSeries::new(unshot, BLUE.stroke_width(2))).map_err(|e| err(&e))?;
+    let unshot = xs
+        .iter()
+        .zip(history)
+        .map(|(&x, p)| (x, p.unshot_fraction.max(y_min)));
+    let series = chart
+        .draw_series(LineSeries::new(unshot, BLUE.stroke_width(2)))
+        .map_err(|e| err(&e))?;
     if labels {
-        series.label("unshot power / emitted").legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLUE));
+        series
+            .label("unshot power / emitted")
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLUE));
     }
-    let rms_points: Vec<(f64, f64)> = xs.iter().zip(rms).filter_map(|(&x, r)| r.map(|r| (x, r.max(y_min)))).collect();
+    let rms_points: Vec<(f64, f64)> = xs
+        .iter()
+        .zip(rms)
+        .filter_map(|(&x, r)| r.map(|r| (x, r.max(y_min))))
+        .collect();
     if !rms_points.is_empty() {
-        let s = chart.draw_series(LineSeries::new(rms_points, RED.stroke_width(2))).map_err(|e| err(&e))?;
+        let s = chart
+            .draw_series(LineSeries::new(rms_points, RED.stroke_width(2)))
+            .map_err(|e| err(&e))?;
         if labels {
-            s.label("relative RMS error vs reference").legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], RED));
+            s.label("relative RMS error vs reference")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], RED));
         }
     }
     if labels {
-        chart.configure_series_labels().background_style(WHITE).border_style(BLACK).draw().map_err(|e| err(&e))?;
+        chart
+            .configure_series_labels()
+            .background_style(WHITE)
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| err(&e))?;
     }
     Ok(())
 }

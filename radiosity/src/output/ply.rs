@@ -27,10 +27,15 @@ pub fn solution_ply(solver: &Solver, exposure: f32) -> String {
     for i in 0..n {
         let b = solver.element_corner_radiosity(i, ambient);
         let tri = mesh.tri(&mesh.elements[i]);
-        for k in 0..3 {
-            let (p, c) = (tri.v[k], b[k]);
-            let rgb = (c / std::f32::consts::PI * exposure).to_array().map(super::srgb_byte);
-            let _ = writeln!(s, "{} {} {} {} {} {} {} {} {}", p.x, p.y, p.z, c.x, c.y, c.z, rgb[0], rgb[1], rgb[2]);
+        for (p, c) in tri.v.into_iter().zip(b) {
+            let rgb = (c / std::f32::consts::PI * exposure)
+                .to_array()
+                .map(super::srgb_byte);
+            let _ = writeln!(
+                s,
+                "{} {} {} {} {} {} {} {} {}",
+                p.x, p.y, p.z, c.x, c.y, c.z, rgb[0], rgb[1], rgb[2]
+            );
         }
     }
     for i in 0..n {

@@ -24,20 +24,35 @@ pub fn parse_probes(file: &str, text: &str) -> Result<Vec<Probe>, OutputError> {
         if line.is_empty() {
             continue;
         }
-        let err = |message: String| OutputError::Probe { file: file.into(), line: i + 1, message };
+        let err = |message: String| OutputError::Probe {
+            file: file.into(),
+            line: i + 1,
+            message,
+        };
         let nums: Vec<f32> = line
             .split(|c: char| c.is_whitespace() || c == ',')
             .filter(|w| !w.is_empty())
-            .map(|w| w.parse::<f32>().ok().filter(|x| x.is_finite()).ok_or_else(|| err(format!("`{w}` is not a finite number"))))
+            .map(|w| {
+                w.parse::<f32>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| err(format!("`{w}` is not a finite number")))
+            })
             .collect::<Result<_, _>>()?;
         if nums.len() != 6 {
-            return Err(err(format!("expected 6 numbers `x y z nx ny nz`, found {}", nums.len())));
+            return Err(err(format!(
+                "expected 6 numbers `x y z nx ny nz`, found {}",
+                nums.len()
+            )));
         }
         let normal = Vec3::new(nums[3], nums[4], nums[5]);
         if normal.length() == 0.0 {
             return Err(err("the normal is zero".into()));
         }
-        out.push(Probe { pos: Vec3::new(nums[0], nums[1], nums[2]), normal: normal.normalize() });
+        out.push(Probe {
+            pos: Vec3::new(nums[0], nums[1], nums[2]),
+            normal: normal.normalize(),
+        });
     }
     Ok(out)
 }
@@ -70,8 +85,12 @@ pub fn evaluate(solver: &Solver, probe: &Probe) -> Option<Vec3> {
 pub fn probe_csv(solver: &Solver, probes: &[Probe]) -> String {
     let mut s = String::from("x,y,z,nx,ny,nz,b_r,b_g,b_b\n");
     for p in probes {
-        let b = evaluate(solver, p).map_or(",,".to_string(), |b| format!("{},{},{}", b.x, b.y, b.z));
-        s += &format!("{},{},{},{},{},{},{b}\n", p.pos.x, p.pos.y, p.pos.z, p.normal.x, p.normal.y, p.normal.z);
+        let b =
+            evaluate(solver, p).map_or(",,".to_string(), |b| format!("{},{},{}", b.x, b.y, b.z));
+        s += &format!(
+            "{},{},{},{},{},{},{b}\n",
+            p.pos.x, p.pos.y, p.pos.z, p.normal.x, p.normal.y, p.normal.z
+        );
     }
     s
 }

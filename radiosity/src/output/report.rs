@@ -112,7 +112,11 @@ pub fn build(solver: &Solver, file: &str, timings: Timings) -> Report {
         .objects
         .iter()
         .zip(solver.object_means())
-        .map(|(o, (area, b))| ObjectReport { name: o.name.clone(), area, mean_b: b.to_array() })
+        .map(|(o, (area, b))| ObjectReport {
+            name: o.name.clone(),
+            area,
+            mean_b: b.to_array(),
+        })
         .collect();
     let a = solver.accounts;
     Report {
@@ -139,21 +143,41 @@ pub fn build(solver: &Solver, file: &str, timings: Timings) -> Report {
         },
         settings: serde_json::to_value(solver.config()).unwrap_or_default(),
         timings,
-        nodes: vec![NodeReport { node: 0, stats: solver.stats }],
+        nodes: vec![NodeReport {
+            node: 0,
+            stats: solver.stats,
+        }],
         links: Vec::new(),
         rms_error: solver.rms_error(),
     }
 }
 
 /// Reads the per-object mean B of a reference `report.json`, matched to `names` by object name.
-pub fn reference_means(file: &str, text: &str, names: &[String]) -> Result<Vec<Option<DVec3>>, OutputError> {
-    let err = |message: String| OutputError::Reference { file: file.into(), message };
-    let value: serde_json::Value = serde_json::from_str(text).map_err(|e| err(format!("not JSON: {e}")))?;
-    let objects = value.get("objects").and_then(|o| o.as_array()).ok_or_else(|| err("no `objects` array".into()))?;
+pub fn reference_means(
+    file: &str,
+    text: &str,
+    names: &[String],
+) -> Result<Vec<Option<DVec3>>, OutputError> {
+    let err = |message: String| OutputError::Reference {
+        file: file.into(),
+        message,
+    };
+    let value: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| err(format!("not JSON: {e}")))?;
+    let objects = value
+        .get("objects")
+        .and_then(|o| o.as_array())
+        .ok_or_else(|| err("no `objects` array".into()))?;
     let mut by_name = std::collections::HashMap::new();
     for o in objects {
-        let name = o.get("name").and_then(|n| n.as_str()).ok_or_else(|| err("an object has no `name`".into()))?;
-        let b = o.get("mean_b").and_then(|b| b.as_array()).filter(|b| b.len() == 3);
+        let name = o
+            .get("name")
+            .and_then(|n| n.as_str())
+            .ok_or_else(|| err("an object has no `name`".into()))?;
+        let b = o
+            .get("mean_b")
+            .and_then(|b| b.as_array())
+            .filter(|b| b.len() == 3);
         let b = b.and_then(|b| b.iter().map(|x| x.as_f64()).collect::<Option<Vec<f64>>>());
         let b = b.ok_or_else(|| err(format!("object `{name}` has no numeric `mean_b` triple")))?;
         by_name.insert(name.to_string(), DVec3::new(b[0], b[1], b[2]));

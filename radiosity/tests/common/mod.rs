@@ -21,7 +21,12 @@ pub fn closed_box(lo: Vec3, hi: Vec3, reflectance: f32, emission: impl Fn(usize)
             p[v] = if b { hi[v] } else { lo[v] };
             p
         };
-        let (p0, p1, p2, p3) = (corner(false, false), corner(true, false), corner(true, true), corner(false, true));
+        let (p0, p1, p2, p3) = (
+            corner(false, false),
+            corner(true, false),
+            corner(true, true),
+            corner(false, true),
+        );
         let mut t = [Tri::new(p0, p1, p2), Tri::new(p0, p2, p3)];
         let inward = if at_hi { -1.0 } else { 1.0 };
         if t[0].normal()[axis] * inward < 0.0 {
@@ -33,7 +38,10 @@ pub fn closed_box(lo: Vec3, hi: Vec3, reflectance: f32, emission: impl Fn(usize)
             emission: Vec3::splat(emission(f)),
         });
         for tri in t {
-            scene.triangles.push(SceneTri { tri, object: f as u32 });
+            scene.triangles.push(SceneTri {
+                tri,
+                object: f as u32,
+            });
         }
     }
     scene

@@ -1,0 +1,58 @@
+//! Prints occlusion throughput of the octree on the 10k-triangle Cornell box for a few build
+//! settings (single thread): `cargo run --release --example octree_tune`.
+
+use std::time::Instant;
+
+use occ_radiosity::octree::{Octree, OctreeConfig, Traversal};
+use occ_radiosity::rng::Pcg32;
+use occ_radiosity::scene::cornell;
+
+fn main() {
+    let tris = cornell::grid_triangles(18).expect("cornell");
+    let mut rng = Pcg32::new(7, 1);
+    let total: f32 = tris.iter().map(|t| t.area()).sum();
+    let mut cdf = Vec::new();
+    let mut acc = 0.0;
+    for t in &tris {
+        acc += t.area();
+        cdf.push(acc);
+    }
+    let mut pick = || {
+        let x = rng.next_f32() * total;
+        let i = cdf.partition_point(|&c| c < x).min(tris.len() - 1);
+        (
+            tris[i].sample(rng.next_f32(), rng.next_f32()),
+            tris[i].normal(),
+        )
+    };
+    let rays: Vec<_> = (0..200_000)
+        .map(|_| {
+            let (a, n) = pick();
+            let (b, _) = pick();
+            let o = a + n * 1e-3;
+            (o, b - o)
+        })
+        .collect();
+    for (max_leaf, max_depth) in [(6, 12), (8, 8), (12, 8), (16, 7), (24, 6), (4, 10)] {
+        let tree = Octree::build(
+            &tris,
+            OctreeConfig {
+                max_leaf,
+                max_depth,
+            },
+        );
+        for mode in [Traversal::Samet, Traversal::Glassner] {
+            let start = Instant::now();
+            let hits = rays
+                .iter()
+                .filter(|(o, d)| tree.occluded(*o, *d, 0.0, 0.999, mode))
+                .count();
+            let s = start.elapsed().as_secs_f64();
+            println!(
+                "max_leaf {max_leaf:>2} depth {max_depth:>2} {mode:?}: {:.2} M rays/s ({hits} occluded) {:?}",
+                rays.len() as f64 / s / 1e6,
+                tree.stats()
+            );
+        }
+    }
+}
