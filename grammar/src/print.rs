@@ -423,6 +423,16 @@ impl Printer {
                     ProcessKind::Delay { timer, time } => {
                         format!("{} ? AFTER {}", expr(timer), expr(time))
                     }
+                    ProcessKind::CaseInput { chan, variants } => match variants.as_slice() {
+                        [v] => {
+                            let mut text = format!("{} ? CASE {}", expr(chan), v.tag.text);
+                            for item in &v.items {
+                                let _ = write!(text, "; {}", item_s(item));
+                            }
+                            text
+                        }
+                        _ => "SKIP".to_string(),
+                    },
                     _ => "SKIP".to_string(),
                 };
                 self.body(&format!("{}{guard}", cond_s(cond)), body);

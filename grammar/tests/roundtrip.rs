@@ -145,3 +145,42 @@ fn collect(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
         }
     }
 }
+
+/// The classic cgtests (kept outside the repository): every one that parses must round-trip.
+/// Run with `OCC_CGTESTS=/path/to/cgtests cargo test -p occ-grammar --test roundtrip -- --ignored`.
+#[test]
+#[ignore = "needs the cgtests, which are not part of the repository (set OCC_CGTESTS)"]
+fn cgtests_round_trip() {
+    let dir = std::path::PathBuf::from(std::env::var("OCC_CGTESTS").expect("set OCC_CGTESTS"));
+    let mut loader = Dir(dir.clone());
+    let mut count = 0;
+    for entry in std::fs::read_dir(&dir).expect("cgtests folder").flatten() {
+        let path = entry.path();
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("")
+            .to_string();
+        if !name.starts_with("cgtest") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).expect("readable");
+        let parsed = occ_grammar::parse_source(&name, &text, &mut loader);
+        if parsed.has_errors() {
+            eprintln!("{name}: does not parse");
+            continue;
+        }
+        assert_round_trip(&parsed.program);
+        count += 1;
+    }
+    eprintln!("{count} cgtests round-tripped");
+}
+
+struct Dir(std::path::PathBuf);
+
+impl occ_grammar::preprocess::Loader for Dir {
+    fn load(&mut self, name: &str, _from: &str) -> Option<(String, String)> {
+        let text = std::fs::read_to_string(self.0.join(name)).ok()?;
+        Some((name.to_string(), text))
+    }
+}

@@ -75,9 +75,18 @@ pub fn assert_round_trip(program: &occ_grammar::ast::Program) {
         messages.is_empty(),
         "printed text does not parse:\n{printed}\n{messages:#?}"
     );
-    assert_eq!(
-        spanless(&again.program.decls),
-        spanless(&program.decls),
-        "round trip changed the AST; printed:\n{printed}"
-    );
+    let (before, after) = (spanless(&program.decls), spanless(&again.program.decls));
+    if before != after {
+        let at = before
+            .bytes()
+            .zip(after.bytes())
+            .position(|(a, b)| a != b)
+            .unwrap_or(before.len().min(after.len()));
+        let window = |s: &str| s[at.saturating_sub(300)..(at + 300).min(s.len())].to_string();
+        panic!(
+            "round trip changed the AST at byte {at}:\n  before: {}\n  after:  {}",
+            window(&before),
+            window(&after)
+        );
+    }
 }
