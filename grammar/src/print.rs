@@ -261,10 +261,23 @@ impl Printer {
     ) {
         let results: Vec<String> = results.iter().map(ty_s).collect();
         let inline = if inline { "INLINE " } else { "" };
+        let is_name = name.text.starts_with(|c: char| c.is_ascii_alphabetic());
+        let shown = if is_name {
+            name.text.clone()
+        } else {
+            let mut quoted = String::new();
+            literal(
+                &mut quoted,
+                &Literal {
+                    kind: LitKind::String(name.text.clone().into_bytes()),
+                    ty: None,
+                },
+            );
+            quoted
+        };
         let head = format!(
-            "{} {inline}FUNCTION {} ({})",
+            "{} {inline}FUNCTION {shown} ({})",
             results.join(", "),
-            name.text,
             params_s(params)
         );
         match body {

@@ -182,6 +182,10 @@ accepts_top!(
     "MY, INT FUNCTION f (VAL MY x) IS x, 1:\n"
 );
 accepts_top!(inline_function, "INT INLINE FUNCTION f (VAL INT x) IS x:\n");
+accepts_top!(
+    user_defined_operator,
+    "INT64 FUNCTION \"+\" (VAL INT64 a, b) IS a PLUS b:\n"
+);
 accepts_top!(data_type_alias, "DATA TYPE MY IS INT32:\n");
 accepts_top!(
     data_type_record,
