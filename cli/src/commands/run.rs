@@ -93,7 +93,8 @@ pub fn build(file: &Path, include: &[PathBuf]) -> Result<occ_codegen::Compiled, 
             .collect();
         return Err(Failure::Compile(msgs));
     }
-    let (checked, diags) = occ_compiler::check(&parsed.program);
+    let options = occ_compiler::Options::from_source(&text);
+    let (checked, diags) = occ_compiler::check_with(&parsed.program, options);
     let Some(checked) = checked else {
         let msgs = diags
             .iter()
