@@ -21,12 +21,21 @@ pub fn prepend<T>(first: T, rest: Vec<T>) -> Vec<T> {
     all
 }
 
+/// What the grammar's actions collect while parsing.
+#[derive(Debug, Default)]
+pub struct State {
+    /// Syntax errors found so far (recovered ones and operator-mixing ones).
+    pub diagnostics: Vec<Diagnostic>,
+    /// Some line was skipped after a syntax error, so the tree lacks code that was written.
+    pub dropped: bool,
+}
+
 /// Records a recovered syntax error (the parser skipped to the end of the line).
-pub fn recovered<'a>(
-    diags: &mut Vec<Diagnostic>,
-    error: ErrorRecovery<usize, Token<'a>, Diagnostic>,
-) {
-    diags.push(crate::parser::syntax_error(error.error));
+pub fn recovered<'a>(state: &mut State, error: ErrorRecovery<usize, Token<'a>, Diagnostic>) {
+    state.dropped = true;
+    state
+        .diagnostics
+        .push(crate::parser::syntax_error(error.error));
 }
 
 /// Operators that may be chained without parentheses (`a + b + c`).

@@ -21,6 +21,23 @@ pub type Spanned<'a> = (usize, Token<'a>, usize);
 
 /// Lexes `text` and applies the layout rule, returning the tokens and lexical diagnostics.
 pub fn tokens(text: &str) -> (Vec<Spanned<'_>>, Vec<Diagnostic>) {
+    let lexed = lex(text);
+    (lexed.tokens, lexed.diagnostics)
+}
+
+/// The layout pass's result.
+#[derive(Debug)]
+pub struct Lexed<'a> {
+    /// The tokens, layout included.
+    pub tokens: Vec<Spanned<'a>>,
+    /// Lexical and indentation diagnostics.
+    pub diagnostics: Vec<Diagnostic>,
+    /// Some text was not a token and was left out.
+    pub dropped: bool,
+}
+
+/// Lexes `text` and applies the layout rule.
+pub fn lex(text: &str) -> Lexed<'_> {
     let mut layout = Layout {
         text,
         out: Vec::with_capacity(text.len() / 3),
@@ -31,10 +48,15 @@ pub fn tokens(text: &str) -> (Vec<Spanned<'_>>, Vec<Diagnostic>) {
         asm_column: None,
         after_paren: false,
         blocks: Vec::new(),
+        dropped: false,
     };
     layout.run();
     mark_tables(&mut layout.out);
-    (layout.out, layout.diagnostics)
+    Lexed {
+        tokens: layout.out,
+        diagnostics: layout.diagnostics,
+        dropped: layout.dropped,
+    }
 }
 
 struct Layout<'a> {
@@ -53,6 +75,8 @@ struct Layout<'a> {
     after_paren: bool,
     /// Open parenthesised blocks (`(VALOF ...)` over several lines).
     blocks: Vec<Block>,
+    /// Some text was not a token.
+    dropped: bool,
 }
 
 /// A parenthesised block spanning lines: `(` then declarations or `VALOF` on the next lines,
@@ -82,6 +106,7 @@ impl<'a> Layout<'a> {
                     }
                     Ok(token) => self.token(token, start, end),
                     Err(error) => {
+                        self.dropped = true;
                         let span = Span::new(start, end);
                         let message = match error {
                             LexError::BadCharacter => {

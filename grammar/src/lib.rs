@@ -39,6 +39,10 @@ pub struct Parsed {
     pub map: SourceMap,
     /// Preprocessor, lexer and parser diagnostics, in order.
     pub diagnostics: Vec<Diagnostic>,
+    /// The program holds all the code written (no file missing, no token or line dropped), so a
+    /// checker may run on it even when there are errors (such as a missing pair of
+    /// parentheses) and report its own errors in the same run.
+    pub complete: bool,
 }
 
 impl Parsed {
@@ -53,14 +57,20 @@ impl Parsed {
 /// Preprocesses and parses the file `path` whose text is `text`.
 pub fn parse_source(path: &str, text: &str, loader: &mut dyn preprocess::Loader) -> Parsed {
     let pre = preprocess::preprocess(path, text, loader);
-    let (mut program, parse_diags) = parser::parse(&pre.text);
+    let parse = parser::parse(&pre.text);
+    let mut program = parse.program;
     program.pragmas = pre.pragmas;
+    let preprocessed_all = pre
+        .diagnostics
+        .iter()
+        .all(|d| d.severity != diagnostic::Severity::Error);
     let mut diagnostics = pre.diagnostics;
-    diagnostics.extend(parse_diags);
+    diagnostics.extend(parse.diagnostics);
     Parsed {
         program,
         text: pre.text,
         map: pre.map,
         diagnostics,
+        complete: preprocessed_all && parse.complete,
     }
 }

@@ -17,39 +17,57 @@ mod generated {
     include!(concat!(env!("OUT_DIR"), "/occam.rs"));
 }
 
+/// The parser's result.
+#[derive(Debug)]
+pub struct Parse {
+    /// The program, with any line that had a syntax error skipped.
+    pub program: Program,
+    /// Lexical, layout and syntax diagnostics, in source order.
+    pub diagnostics: Vec<Diagnostic>,
+    /// The tree holds all the code written: no token or line was dropped. Errors about
+    /// operator parentheses or indentation steps leave the tree complete, so a checker can still
+    /// run on it and report its own errors in the same run.
+    pub complete: bool,
+}
+
 /// Parses the preprocessed `text` into a program. The program is returned even when there are
 /// errors (with the erroneous lines skipped); `diagnostics` then holds at least one error.
-pub fn parse(text: &str) -> (Program, Vec<Diagnostic>) {
-    let (tokens, mut diagnostics) = crate::layout::tokens(text);
+pub fn parse(text: &str) -> Parse {
+    let lexed = crate::layout::lex(text);
+    let (tokens, mut diagnostics) = (lexed.tokens, lexed.diagnostics);
+    let lexed_all = !lexed.dropped;
+    let empty = Program {
+        decls: Vec::new(),
+        pragmas: Vec::new(),
+    };
     if let Some(deep) = too_deep(&tokens) {
         diagnostics.push(deep);
-        let empty = Program {
-            decls: Vec::new(),
-            pragmas: Vec::new(),
+        return Parse {
+            program: empty,
+            diagnostics,
+            complete: false,
         };
-        return (empty, diagnostics);
     }
-    let mut parse_diags = Vec::new();
-    let result = generated::ProgramParser::new().parse(
-        &mut parse_diags,
-        tokens.into_iter().map(Ok::<_, Diagnostic>),
-    );
-    diagnostics.append(&mut parse_diags);
-    let program = match result {
-        Ok(program) => program,
+    let mut state = crate::actions::State::default();
+    let result = generated::ProgramParser::new()
+        .parse(&mut state, tokens.into_iter().map(Ok::<_, Diagnostic>));
+    diagnostics.append(&mut state.diagnostics);
+    let (program, parsed_all) = match result {
+        Ok(program) => (program, !state.dropped),
         Err(error) => {
             diagnostics.push(syntax_error(error));
-            Program {
-                decls: Vec::new(),
-                pragmas: Vec::new(),
-            }
+            (empty, false)
         }
     };
     diagnostics.sort_by_key(|d| match &d.place {
         crate::diagnostic::Place::Output(span) => span.start,
         crate::diagnostic::Place::File(_) => 0,
     });
-    (program, diagnostics)
+    Parse {
+        program,
+        diagnostics,
+        complete: lexed_all && parsed_all,
+    }
 }
 
 /// The deepest nesting (parentheses, brackets, indentation, runs of monadic operators) the parser

@@ -320,3 +320,20 @@ fn top_level_error_recovery_continues() {
     let lines: Vec<usize> = errs.iter().map(|(l, _)| *l).collect();
     assert!(lines.contains(&4) && lines.contains(&6), "{errs:#?}");
 }
+
+#[test]
+fn operator_errors_leave_the_tree_complete_but_dropped_lines_do_not() {
+    let soft = common::parse(&proc_body("x := a + b * c"));
+    assert!(soft.has_errors() && soft.complete);
+    let hard = common::parse(&proc_body("SEQ\n  x := ]\n  SKIP"));
+    assert!(hard.has_errors() && !hard.complete);
+    let bad_token = common::parse(&proc_body("x := 1 $ 2"));
+    assert!(!bad_token.complete);
+    let missing = occ_grammar::parse_source(
+        "m.occ",
+        "#INCLUDE \"gone.inc\"\n",
+        &mut std::collections::HashMap::new(),
+    );
+    assert!(!missing.complete);
+    assert!(common::parse(&proc_body("SKIP")).complete);
+}
