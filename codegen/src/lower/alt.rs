@@ -25,6 +25,15 @@ enum Guard<'a> {
 fn flatten<'a>(alt: &'a Alt, out: &mut Vec<Group<'a>>) -> Result<(), Span> {
     for a in &alt.alternatives {
         match (&alt.repl, &a.kind) {
+            (Some(r), AltKind::Nested(inner)) if inner.repl.is_none() => {
+                // A plain ALT inside a replicated one: each of its guards is replicated.
+                for ia in &inner.alternatives {
+                    if matches!(ia.kind, AltKind::Nested(_)) {
+                        return Err(ia.span);
+                    }
+                    out.push(Group::Repl(r, ia));
+                }
+            }
             (Some(_), AltKind::Nested(_)) => return Err(a.span),
             (Some(r), _) => out.push(Group::Repl(r, a)),
             (None, AltKind::Nested(inner)) => flatten(inner, out)?,
@@ -67,13 +76,7 @@ impl Tr<'_, '_> {
             matches!(guard_of(a), Some(Guard::Timer(_)))
         });
         // Declarations before single alternatives scope over the whole ALT.
-        for g in &groups {
-            if let Group::Single(a) = g {
-                for d in &a.decls {
-                    self.decl(d)?;
-                }
-            }
-        }
+        self.alt_decls(alt)?;
         let start = if timed { "rt_talt" } else { "rt_alt" };
         self.call_rt(start, &[self.node, self.ws]);
         self.no_poll += 1;
@@ -88,6 +91,23 @@ impl Tr<'_, '_> {
         self.no_poll -= 1;
         let sel = self.call_rt("rt_altend", &[self.node, self.ws]);
         self.run_selected(&groups, sel, span)
+    }
+
+    /// Lowers the declarations before the alternatives of an unreplicated ALT (and of the ALTs
+    /// nested in it); they scope over the whole ALT.
+    fn alt_decls(&mut self, alt: &Alt) -> Res<()> {
+        if alt.repl.is_some() {
+            return Ok(());
+        }
+        for a in &alt.alternatives {
+            for d in &a.decls {
+                self.decl(d)?;
+            }
+            if let AltKind::Nested(inner) = &a.kind {
+                self.alt_decls(inner)?;
+            }
+        }
+        Ok(())
     }
 
     fn disable_all(&mut self, groups: &[Group<'_>], pri: bool, span: Span) -> Res<()> {

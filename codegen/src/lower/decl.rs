@@ -45,31 +45,20 @@ impl Tr<'_, '_> {
                 }
                 Ok(())
             }
-            DeclKind::Retypes { name, value, .. } => {
+            DeclKind::Retypes {
+                name,
+                value,
+                ty: written,
+                ..
+            } => {
                 let sym = self.cx.symbol(name)?;
-                let ty = self.cx.checked.symbols[sym].ty.clone();
+                let ty = crate::layout::resolve(
+                    &self.cx.checked.types,
+                    &self.cx.checked.symbols[sym].ty,
+                );
                 let src = self.place(value)?;
                 let size = self.loc_size(&src, value.span)?;
-                let mut l = Loc {
-                    addr: src.addr,
-                    ty: ty.clone(),
-                    dims: Vec::new(),
-                };
-                let sd = crate::layout::static_dims(&ty);
-                // An open dimension takes what is left of the source's size.
-                let known: i64 = sd.iter().map(|d| i64::from(d.unwrap_or(1))).product();
-                let esz = size_of(&self.cx.checked.types, crate::layout::base_elem(&ty))
-                    .unwrap_or(1)
-                    * known.max(1);
-                for d in &sd {
-                    let v = match d {
-                        Some(n) => self.iconst(i64::from(*n)),
-                        None => self.b.ins().udiv_imm_s(size, esz.max(1)),
-                    };
-                    l.dims.push(v);
-                }
-                self.bind_ref(sym, &l);
-                Ok(())
+                self.retype(sym, ty, written, src.addr, size)
             }
             DeclKind::DataType { .. } | DeclKind::Protocol { .. } => Ok(()),
             DeclKind::Proc { .. } => {
@@ -89,6 +78,47 @@ impl Tr<'_, '_> {
             #[allow(unreachable_patterns)]
             _ => Err(self.cx.unsupported(d.span, "this declaration")),
         }
+    }
+
+    /// Binds `sym` of type `ty` (as written: `written`) to the bytes at `addr` of length `size`:
+    /// static dimensions as declared, written lengths evaluated, one open dimension from the size.
+    fn retype(
+        &mut self,
+        sym: occ_compiler::checked::SymbolId,
+        ty: Type,
+        written: &occ_grammar::ast::Ty,
+        addr: cranelift_codegen::ir::Value,
+        size: cranelift_codegen::ir::Value,
+    ) -> Res<()> {
+        let sd = crate::layout::static_dims(&ty);
+        let mut lens = Vec::new();
+        let mut t = written;
+        while let occ_grammar::ast::TyKind::Array { len, elem } = &t.kind {
+            lens.push(len.as_deref());
+            t = elem;
+        }
+        let base = size_of(&self.cx.checked.types, crate::layout::base_elem(&ty)).unwrap_or(1);
+        let mut dims: Vec<Option<cranelift_codegen::ir::Value>> = Vec::new();
+        for (i, d) in sd.iter().enumerate() {
+            let v = match (d, lens.get(i).copied().flatten()) {
+                (Some(n), _) => Some(self.iconst(i64::from(*n))),
+                (None, Some(e)) => Some(self.int_index(e)?),
+                (None, None) => None,
+            };
+            dims.push(v);
+        }
+        // The open dimension (if any) takes what is left.
+        let mut known = self.iconst(base.max(1));
+        for v in dims.iter().flatten() {
+            known = self.b.ins().imul(known, *v);
+        }
+        let one = self.iconst(1);
+        let known = self.b.ins().umax(known, one);
+        let rest = self.b.ins().udiv(size, known);
+        let dims = dims.into_iter().map(|d| d.unwrap_or(rest)).collect();
+        let l = Loc { addr, ty, dims };
+        self.bind_ref(sym, &l);
+        Ok(())
     }
 
     fn alloc_var(&mut self, ty: &Type, name: &Name) -> Res<i32> {
