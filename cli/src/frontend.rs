@@ -78,9 +78,11 @@ pub fn check_file(path: &Path, options: &Options) -> Checked {
         .collect();
 
     // ---- The checker's diagnostics join here (filled in by the `check` helper). ----
-    // The checker runs only on a program that parsed: on a partial tree every dropped
-    // declaration would come back as a cascade of "not declared" errors.
-    if !parsed.has_errors() {
+    // The checker runs only on a complete tree: on a partial one every dropped declaration
+    // would come back as a cascade of "not declared" errors. A complete tree may still carry
+    // syntax errors that drop nothing (operators mixed without parentheses), so those and the
+    // checker's errors are reported in one run.
+    if parsed.complete {
         let check_options = occ_compiler::Options::from_source(&text);
         let (_, found) = occ_compiler::check_with(&parsed.program, check_options);
         diagnostics.extend(found.iter().map(|d| {
@@ -88,7 +90,7 @@ pub fn check_file(path: &Path, options: &Options) -> Checked {
                 occ_compiler::Severity::Error => Severity::Error,
                 occ_compiler::Severity::Warning => Severity::Warning,
             };
-            located(&parsed, severity, d.span, d.message(), d.kind.label(), d.kind.help())
+            located(&parsed, severity, d.span, d.message(), d.label(), d.kind.help())
         }));
     }
 
