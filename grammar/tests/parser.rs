@@ -337,3 +337,45 @@ fn operator_errors_leave_the_tree_complete_but_dropped_lines_do_not() {
     assert!(!missing.complete);
     assert!(common::parse(&proc_body("SKIP")).complete);
 }
+
+#[test]
+fn asm_and_guy_blocks_are_opaque() {
+    let p = process("SEQ\n  ASM\n    LDC #0\n    ST x -- $$ not occam\n  GUY\n    LDL 1\n  SKIP");
+    let ProcessKind::Seq { body, .. } = p.kind else {
+        panic!()
+    };
+    let ProcessKind::Asm(block) = &body[0].kind else {
+        panic!("{:?}", body[0].kind)
+    };
+    assert_eq!(block.lines, ["LDC #0", "ST x -- $$ not occam"]);
+    assert!(matches!(
+        &body[1].kind,
+        ProcessKind::Asm(AsmBlock { guy: true, .. })
+    ));
+    assert!(matches!(body[2].kind, ProcessKind::Skip));
+}
+
+#[test]
+fn valof_block_opening_on_the_line_of_its_parenthesis() {
+    let text = "SEQ\n  []INT b IS [a FROM 1 FOR (INT r :\n                            VALOF\n                              r := 2\n                              RESULT r\n                           )] :\n  SKIP";
+    let p = process(text);
+    let ProcessKind::Seq { body, .. } = p.kind else {
+        panic!()
+    };
+    let ProcessKind::Scope { decls, .. } = &body[0].kind else {
+        panic!()
+    };
+    let DeclKind::Abbrev { value, .. } = &decls[0].kind else {
+        panic!()
+    };
+    let ExprKind::Slice {
+        count: Some(count), ..
+    } = &value.kind
+    else {
+        panic!()
+    };
+    let ExprKind::Valof(v) = &count.kind else {
+        panic!("{:?}", count.kind)
+    };
+    assert_eq!(v.decls.len(), 1);
+}
