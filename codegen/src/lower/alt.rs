@@ -7,12 +7,20 @@ use cranelift_codegen::ir::{InstBuilder, Value, condcodes::IntCC, types};
 use cranelift_frontend::Switch;
 use occ_grammar::ast::{Alt, AltKind, Alternative, Expr, ProcessKind, Replicator, Span};
 
-use super::{Res, Tr, mem};
+use super::{Res, Storage, Tr, mem};
 
-/// One guard group: a single alternative, or a replicated one.
+/// One level of replication around a guard: the replicator and the declarations to lower
+/// once its index is set.
+#[derive(Clone)]
+struct Level<'a> {
+    repl: &'a Replicator,
+    decls: Vec<&'a occ_grammar::ast::Decl>,
+}
+
+/// One guard group: a single alternative, or one inside (nested) replicated ALTs.
 enum Group<'a> {
     Single(&'a Alternative),
-    Repl(&'a Replicator, &'a Alternative),
+    Repl(Vec<Level<'a>>, &'a Alternative),
 }
 
 /// The shape of a guard.
@@ -22,25 +30,28 @@ enum Guard<'a> {
     Skip,
 }
 
-fn flatten<'a>(alt: &'a Alt, out: &mut Vec<Group<'a>>) -> Result<(), Span> {
+fn flatten<'a>(alt: &'a Alt, prefix: &[Level<'a>], out: &mut Vec<Group<'a>>) {
     for a in &alt.alternatives {
-        match (&alt.repl, &a.kind) {
-            (Some(r), AltKind::Nested(inner)) if inner.repl.is_none() => {
-                // A plain ALT inside a replicated one: each of its guards is replicated.
-                for ia in &inner.alternatives {
-                    if matches!(ia.kind, AltKind::Nested(_)) {
-                        return Err(ia.span);
-                    }
-                    out.push(Group::Repl(r, ia));
+        let mut levels = prefix.to_vec();
+        if let Some(r) = &alt.repl {
+            levels.push(Level {
+                repl: r,
+                decls: Vec::new(),
+            });
+        }
+        match &a.kind {
+            AltKind::Nested(inner) => {
+                // Declarations before a nested ALT: at top level they are lowered once
+                // (`alt_decls`); inside a replication, once per index.
+                if let Some(last) = levels.last_mut() {
+                    last.decls.extend(a.decls.iter());
                 }
+                flatten(inner, &levels, out);
             }
-            (Some(_), AltKind::Nested(_)) => return Err(a.span),
-            (Some(r), _) => out.push(Group::Repl(r, a)),
-            (None, AltKind::Nested(inner)) => flatten(inner, out)?,
-            (None, _) => out.push(Group::Single(a)),
+            _ if levels.is_empty() => out.push(Group::Single(a)),
+            _ => out.push(Group::Repl(levels, a)),
         }
     }
-    Ok(())
 }
 
 fn cond_of(a: &Alternative) -> Option<&Expr> {
@@ -69,8 +80,15 @@ impl Tr<'_, '_> {
     /// Lowers an ALT or PRI ALT.
     pub fn alt(&mut self, alt: &Alt, span: Span) -> Res<()> {
         let mut groups = Vec::new();
-        flatten(alt, &mut groups)
-            .map_err(|s| self.cx.unsupported(s, "this nesting of replicated ALTs"))?;
+        flatten(alt, &[], &mut groups);
+        // Where a replicated guard's indices are saved when it is selected.
+        let saved: Vec<Vec<i32>> = groups
+            .iter()
+            .map(|g| match g {
+                Group::Single(_) => Vec::new(),
+                Group::Repl(levels, _) => levels.iter().map(|_| self.frame.alloc(8)).collect(),
+            })
+            .collect();
         let timed = groups.iter().any(|g| {
             let (Group::Single(a) | Group::Repl(_, a)) = g;
             matches!(guard_of(a), Some(Guard::Timer(_)))
@@ -81,16 +99,16 @@ impl Tr<'_, '_> {
         self.call_rt(start, &[self.node, self.ws]);
         self.no_poll += 1;
         for (gi, g) in groups.iter().enumerate() {
-            self.group(g, gi, true, span)?;
+            self.group(g, gi, None, span)?;
         }
         self.no_poll -= 1;
         let wait = if timed { "rt_taltwt" } else { "rt_altwt" };
         self.blocking(wait, &[self.node, self.ws], span)?;
         self.no_poll += 1;
-        self.disable_all(&groups, alt.pri, span)?;
+        self.disable_all(&groups, &saved, alt.pri, span)?;
         self.no_poll -= 1;
         let sel = self.call_rt("rt_altend", &[self.node, self.ws]);
-        self.run_selected(&groups, sel, span)
+        self.run_selected(&groups, &saved, sel, span)
     }
 
     /// Lowers the declarations before the alternatives of an unreplicated ALT (and of the ALTs
@@ -110,10 +128,16 @@ impl Tr<'_, '_> {
         Ok(())
     }
 
-    fn disable_all(&mut self, groups: &[Group<'_>], pri: bool, span: Span) -> Res<()> {
+    fn disable_all(
+        &mut self,
+        groups: &[Group<'_>],
+        saved: &[Vec<i32>],
+        pri: bool,
+        span: Span,
+    ) -> Res<()> {
         if pri || groups.len() < 2 {
             for (gi, g) in groups.iter().enumerate() {
-                self.group(g, gi, false, span)?;
+                self.group(g, gi, Some(&saved[gi]), span)?;
             }
             return Ok(());
         }
@@ -143,7 +167,7 @@ impl Tr<'_, '_> {
                 let next = self.b.create_block();
                 self.b.ins().brif(take, yes, &[], next, &[]);
                 self.b.switch_to_block(yes);
-                self.group(g, gi, false, span)?;
+                self.group(g, gi, Some(&saved[gi]), span)?;
                 self.b.ins().jump(next, &[]);
                 self.b.switch_to_block(next);
             }
@@ -151,40 +175,65 @@ impl Tr<'_, '_> {
         Ok(())
     }
 
-    /// Enables (`enable`) or disables one guard group; group `gi`'s branch numbers are
-    /// `gi << 32 | k` for replication `k`.
-    fn group(&mut self, g: &Group<'_>, gi: usize, enable: bool, span: Span) -> Res<()> {
+    /// Enables (`save` is `None`) or disables one guard group; group `gi`'s branch number is
+    /// `gi << 32`. When disabling selects a replicated guard, its indices are saved in `save`.
+    fn group(&mut self, g: &Group<'_>, gi: usize, save: Option<&[i32]>, span: Span) -> Res<()> {
         let tag = (gi as i64) << 32;
         match g {
             Group::Single(a) => {
                 let br = self.iconst(tag);
-                self.guard(a, br, enable)
+                self.guard(a, br, save.is_none())?;
+                Ok(())
             }
-            Group::Repl(r, a) => {
-                let a = *a;
-                let k_off = self.frame.alloc(8);
-                let ka = self.local_addr(k_off);
-                let zero = self.iconst(0);
-                self.b.ins().store(mem(), zero, ka, 0);
-                self.replicated(r, span, |tr| {
-                    for d in &a.decls {
-                        tr.decl(d)?;
-                    }
-                    let ka = tr.local_addr(k_off);
-                    let k = tr.b.ins().load(types::I64, mem(), ka, 0);
-                    let br = tr.b.ins().iadd_imm_s(k, tag);
-                    tr.guard(a, br, enable)?;
-                    let ka = tr.local_addr(k_off);
-                    let k = tr.b.ins().load(types::I64, mem(), ka, 0);
-                    let k = tr.b.ins().iadd_imm_s(k, 1);
-                    tr.b.ins().store(mem(), k, ka, 0);
-                    Ok(())
-                })
-            }
+            Group::Repl(levels, a) => self.levels(levels, 0, a, tag, save, span),
         }
     }
 
-    fn guard(&mut self, a: &Alternative, branch: Value, enable: bool) -> Res<()> {
+    fn levels(
+        &mut self,
+        levels: &[Level<'_>],
+        at: usize,
+        a: &Alternative,
+        tag: i64,
+        save: Option<&[i32]>,
+        span: Span,
+    ) -> Res<()> {
+        let Some(level) = levels.get(at) else {
+            for d in &a.decls {
+                self.decl(d)?;
+            }
+            let br = self.iconst(tag);
+            let hit = self.guard(a, br, save.is_none())?;
+            if let (Some(slots), Some(hit)) = (save, hit) {
+                let yes = self.b.create_block();
+                let next = self.b.create_block();
+                self.b.ins().brif(hit, yes, &[], next, &[]);
+                self.b.switch_to_block(yes);
+                for (l, off) in levels.iter().zip(slots) {
+                    let sym = self.cx.symbol(&l.repl.name)?;
+                    let Some(Storage::Var { depth, offset }) = self.cx.env.get(&sym).cloned()
+                    else {
+                        return Err(self.cx.internal(span, "replicator without storage"));
+                    };
+                    let f = self.frame_at(depth);
+                    let v = self.b.ins().load(types::I32, mem(), f, offset);
+                    let dst = self.local_addr(*off);
+                    self.b.ins().store(mem(), v, dst, 0);
+                }
+                self.b.ins().jump(next, &[]);
+                self.b.switch_to_block(next);
+            }
+            return Ok(());
+        };
+        self.replicated(level.repl, span, |tr| {
+            for d in &level.decls {
+                tr.decl(d)?;
+            }
+            tr.levels(levels, at + 1, a, tag, save, span)
+        })
+    }
+
+    fn guard(&mut self, a: &Alternative, branch: Value, enable: bool) -> Res<Option<Value>> {
         let cond = match cond_of(a) {
             Some(c) => {
                 let v = self.expr(c)?;
@@ -195,13 +244,25 @@ impl Tr<'_, '_> {
         let g = guard_of(a).ok_or_else(|| self.cx.unsupported(a.span, "this ALT guard"))?;
         let (n, w) = (self.node, self.ws);
         match (g, enable) {
-            (Guard::Chan(c), true) => {
+            (Guard::Chan(c), en) => {
+                // A false boolean guard does not evaluate (or range-check) its channel.
+                let yes = self.b.create_block();
+                let done = self.b.create_block();
+                self.b.append_block_param(done, types::I64);
+                let zero = self.iconst(0);
+                self.b.ins().brif(cond, yes, &[], done, &[zero.into()]);
+                self.b.switch_to_block(yes);
                 let ch = self.place(c)?.addr;
-                self.call_rt("rt_enbc", &[n, w, cond, ch]);
-            }
-            (Guard::Chan(c), false) => {
-                let ch = self.place(c)?.addr;
-                self.call_rt("rt_disc", &[n, w, cond, ch, branch]);
+                let r = if en {
+                    self.call_rt("rt_enbc", &[n, w, cond, ch]);
+                    self.iconst(0)
+                } else {
+                    self.call_rt("rt_disc", &[n, w, cond, ch, branch])
+                };
+                self.b.ins().jump(done, &[r.into()]);
+                self.b.switch_to_block(done);
+                let r = self.b.block_params(done)[0];
+                return Ok((!en).then_some(r));
             }
             (Guard::Timer(t), en) => {
                 let v = self.expr(t)?;
@@ -209,23 +270,26 @@ impl Tr<'_, '_> {
                 if en {
                     self.call_rt("rt_enbt", &[n, w, cond, v]);
                 } else {
-                    self.call_rt("rt_dist", &[n, w, cond, v, branch]);
+                    return Ok(Some(self.call_rt("rt_dist", &[n, w, cond, v, branch])));
                 }
             }
             (Guard::Skip, true) => {
                 self.call_rt("rt_enbs", &[n, w, cond]);
             }
             (Guard::Skip, false) => {
-                self.call_rt("rt_diss", &[n, w, cond, branch]);
+                return Ok(Some(self.call_rt("rt_diss", &[n, w, cond, branch])));
             }
         }
-        Ok(())
+        Ok(None)
     }
 
-    fn run_selected(&mut self, groups: &[Group<'_>], sel: Value, span: Span) -> Res<()> {
-        let sel_off = self.frame.alloc(8);
-        let a = self.local_addr(sel_off);
-        self.b.ins().store(mem(), sel, a, 0);
+    fn run_selected(
+        &mut self,
+        groups: &[Group<'_>],
+        saved: &[Vec<i32>],
+        sel: Value,
+        span: Span,
+    ) -> Res<()> {
         let gsel = self.b.ins().sshr_imm_s(sel, 32);
         let done = self.b.create_block();
         let none = self.b.create_block();
@@ -235,34 +299,26 @@ impl Tr<'_, '_> {
             sw.set_entry(i as u128, *b);
         }
         sw.emit(&mut self.b, gsel, none);
-        for (g, blk) in groups.iter().zip(blocks) {
+        for ((g, blk), slots) in groups.iter().zip(blocks).zip(saved) {
             self.b.switch_to_block(blk);
             let mark = self.frame.mark();
             let a = match g {
                 Group::Single(a) => a,
-                Group::Repl(r, a) => {
-                    // Set the index to base + k * step.
-                    let sa = self.local_addr(sel_off);
-                    let s = self.b.ins().load(types::I64, mem(), sa, 0);
-                    let k = self.b.ins().ireduce(types::I32, s);
-                    let base = self.expr(&r.base)?;
-                    let step = match &r.step {
-                        Some(st) => self.expr(st)?,
-                        None => self.b.ins().iconst(types::I32, 1),
-                    };
-                    let ks = self.b.ins().imul(k, step);
-                    let idx = self.b.ins().iadd(base, ks);
-                    let off = self.frame.alloc(8);
-                    let ia = self.local_addr(off);
-                    self.store_scalar(idx, ia);
-                    let sym = self.cx.symbol(&r.name)?;
-                    self.cx.env.insert(
-                        sym,
-                        super::Storage::Var {
-                            depth: self.depth,
-                            offset: off,
-                        },
-                    );
+                Group::Repl(levels, a) => {
+                    // The indices saved when the guard was selected, then the declarations.
+                    for (l, off) in levels.iter().zip(slots) {
+                        let sym = self.cx.symbol(&l.repl.name)?;
+                        self.cx.env.insert(
+                            sym,
+                            Storage::Var {
+                                depth: self.depth,
+                                offset: *off,
+                            },
+                        );
+                        for d in &l.decls {
+                            self.decl(d)?;
+                        }
+                    }
                     for d in &a.decls {
                         self.decl(d)?;
                     }
