@@ -86,7 +86,7 @@ impl Diagnostic {
         match map.files.get(location.file) {
             Some(file) => miette::Report::new(diag).with_source_code(miette::NamedSource::new(
                 file.path.clone(),
-                file.text.clone(),
+                file.shared_text(),
             )),
             None => miette::Report::new(diag),
         }

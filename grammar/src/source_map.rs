@@ -7,6 +7,7 @@
 
 use crate::ast::Span;
 use std::ops::Range;
+use std::sync::Arc;
 
 /// One original source file.
 #[derive(Debug, Clone)]
@@ -16,17 +17,27 @@ pub struct SourceFile {
     /// The full original text.
     pub text: String,
     line_starts: Vec<usize>,
+    /// The same text, shared by every report that shows it (so many diagnostics on a large file
+    /// do not copy it many times).
+    shared: Arc<str>,
 }
 
 impl SourceFile {
     /// Creates a source file and indexes its lines.
     pub fn new(path: String, text: String) -> Self {
         let line_starts = line_starts(&text);
+        let shared = Arc::from(text.as_str());
         SourceFile {
             path,
             text,
             line_starts,
+            shared,
         }
+    }
+
+    /// Returns the text as a cheaply clonable shared string (for miette reports).
+    pub fn shared_text(&self) -> Arc<str> {
+        Arc::clone(&self.shared)
     }
 
     /// Returns the byte offset where 0-based `line` starts (the end of the text past the last line).
