@@ -41,6 +41,18 @@ fn main() {
                 max_depth,
             },
         );
+        let (mut leaves, mut tested) = (0u64, 0u64);
+        for (o, d) in &rays {
+            let (l, t) = tree.occlusion_cost(*o, *d, 0.0, 0.999, Traversal::Samet);
+            leaves += l as u64;
+            tested += t as u64;
+        }
+        let n = rays.len() as f64;
+        println!(
+            "max_leaf {max_leaf} depth {max_depth} per ray: {:.1} leaves, {:.1} triangle tests",
+            leaves as f64 / n,
+            tested as f64 / n
+        );
         for mode in [Traversal::Samet, Traversal::Glassner] {
             let start = Instant::now();
             let hits = rays

@@ -235,6 +235,25 @@ impl Octree {
         hit
     }
 
+    /// Returns `(leaves visited, triangles tested)` for an occlusion query (for measurements).
+    pub fn occlusion_cost(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        tmin: f32,
+        tmax: f32,
+        mode: Traversal,
+    ) -> (u32, u32) {
+        let (mut leaves, mut tested) = (0, 0);
+        self.walk(o, d, tmin, tmax, mode, |tris, _, _| {
+            leaves += 1;
+            tested += tris.len() as u32;
+            tris.iter()
+                .any(|t| ray_triangle(o, d, t.v0, t.e1, t.e2).is_some_and(|h| h > tmin && h < tmax))
+        });
+        (leaves, tested)
+    }
+
     /// Returns the nearest hit `(t, triangle id)` of `o + t d` with `tmin < t < tmax`.
     pub fn first_hit(
         &self,
