@@ -4,7 +4,6 @@ use std::process::Command;
 
 /// Runs `occ test` on `tests/lang` and asserts that nothing failed.
 #[test]
-#[ignore = "front end not wired yet"]
 fn language_corpus_passes() {
     let corpus = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/lang");
     let output = Command::new(env!("CARGO_BIN_EXE_occ"))
