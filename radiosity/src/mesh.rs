@@ -457,6 +457,49 @@ mod tests {
     }
 
     #[test]
+    fn t_junction_is_split() {
+        // A square: the lower-left half is one triangle; the upper-right half is two triangles
+        // meeting at the midpoint of the diagonal, which is a T-junction on the first.
+        use crate::scene::{Object, SceneTri};
+        let v = |x: f32, z: f32| Vec3::new(x, 0.0, z);
+        let tris = [
+            Tri::new(v(0.0, 0.0), v(0.0, 2.0), v(2.0, 0.0)),
+            Tri::new(v(0.0, 2.0), v(2.0, 2.0), v(1.0, 1.0)),
+            Tri::new(v(2.0, 2.0), v(2.0, 0.0), v(1.0, 1.0)),
+        ];
+        let scene = Scene {
+            objects: vec![Object {
+                name: "floor".into(),
+                reflectance: Vec3::splat(0.5),
+                emission: Vec3::ZERO,
+            }],
+            triangles: tris
+                .iter()
+                .map(|&tri| SceneTri { tri, object: 0 })
+                .collect(),
+            ..Scene::default()
+        };
+        let mesh = Mesh::from_scene(
+            &scene,
+            MeshConfig {
+                patch_size: 10.0,
+                element_size: 10.0,
+            },
+        );
+        assert_eq!(mesh.stats.t_junction_splits, 1);
+        assert_eq!(mesh.elements.len(), 4);
+        assert_eq!(mesh.vertices.len(), 5);
+        for (a, b) in mesh.edge_list() {
+            let n = mesh.elements_on_edge(a, b).len();
+            let boundary = (mesh.vertices[a as usize].pos + mesh.vertices[b as usize].pos) * 0.5;
+            let on_boundary = [boundary.x, boundary.z]
+                .iter()
+                .any(|&c| c == 0.0 || c == 2.0);
+            assert_eq!(n, if on_boundary { 1 } else { 2 }, "edge {a}-{b}");
+        }
+    }
+
+    #[test]
     fn mesh_is_conforming_every_edge_has_one_or_two_elements() {
         let scene = cornell::load(true).expect("scene");
         let mesh = Mesh::from_scene(
