@@ -6,8 +6,9 @@
 //! Traversal walks the voxels a ray crosses in order. Voxels are addressed by integer location
 //! codes on the finest grid (`2^depth` cells per axis), which makes neighbour finding exact:
 //! - **Samet** (the default): from the current leaf, step across the exit face to the integer cell
-//!   just beyond it, climb parent links until the node contains that cell (the nearest common
-//!   ancestor), then descend to the leaf holding it.
+//!   just beyond it, climb to the nearest common ancestor (its level is the number of leading bits
+//!   the cell shares with the leaf's origin; the node itself is kept on the ray's root-to-leaf
+//!   path, so the climb reads no memory), then descend to the leaf holding it.
 //! - **Glassner** (the comparison): the same step, but every descent starts at the root.
 //!
 //! Invariants:
@@ -37,7 +38,6 @@ pub struct PackedTri {
 struct Node {
     origin: UVec3,
     level: u32,
-    parent: u32,
     /// Interior: index of the first of 8 children. Leaf: index of the first packed triangle.
     first: u32,
     /// Number of triangles for a leaf; `INTERIOR` for an interior node.
@@ -81,6 +81,9 @@ pub struct Octree {
     cell: f32,
     depth: u32,
     nodes: Vec<Node>,
+    /// The traversal's copy of `nodes`: `[first, count]` only (8 bytes a node, so the whole tree
+    /// stays in cache; origins and levels are recomputed from the cell being sought).
+    hot: Vec<[u32; 2]>,
     tris: Vec<PackedTri>,
     ids: Vec<u32>,
 }
@@ -122,15 +125,16 @@ impl Octree {
             nodes: vec![Node {
                 origin: UVec3::ZERO,
                 level: 0,
-                parent: 0,
                 first: 0,
                 count: 0,
             }],
+            hot: Vec::new(),
             tris: Vec::new(),
             ids: Vec::new(),
         };
         let all: Vec<u32> = (0..tris.len() as u32).collect();
         tree.build_node(0, tris, all, config);
+        tree.hot = tree.nodes.iter().map(|n| [n.first, n.count]).collect();
         tree
     }
 
@@ -152,7 +156,6 @@ impl Octree {
                     let child = Node {
                         origin,
                         level: node.level + 1,
-                        parent: index as u32,
                         first: 0,
                         count: 0,
                     };
@@ -176,7 +179,6 @@ impl Octree {
                     self.nodes.push(Node {
                         origin: *origin,
                         level,
-                        parent: index as u32,
                         first: 0,
                         count: 0,
                     });
@@ -226,16 +228,19 @@ impl Octree {
     /// Returns true when some triangle is hit by `o + t d` with `tmin < t < tmax`.
     pub fn occluded(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32, mode: Traversal) -> bool {
         let mut hit = false;
-        self.walk(o, d, tmin, tmax, mode, |tris, _, _| {
-            hit = tris.iter().any(|t| {
-                ray_triangle(o, d, t.v0, t.e1, t.e2).is_some_and(|h| h > tmin && h < tmax)
+        let mut mailbox = Mailbox::default();
+        self.walk(o, d, tmin, tmax, mode, |tris, ids, _| {
+            hit = tris.iter().zip(ids).any(|(t, &id)| {
+                mailbox.first_visit(id)
+                    && ray_triangle(o, d, t.v0, t.e1, t.e2).is_some_and(|h| h > tmin && h < tmax)
             });
             hit
         });
         hit
     }
 
-    /// Returns `(leaves visited, triangles tested)` for an occlusion query (for measurements).
+    /// Returns `(leaves visited, triangles tested)` for an occlusion query (for measurements);
+    /// a triangle skipped by the mailbox is not counted as tested.
     pub fn occlusion_cost(
         &self,
         o: Vec3,
@@ -245,11 +250,14 @@ impl Octree {
         mode: Traversal,
     ) -> (u32, u32) {
         let (mut leaves, mut tested) = (0, 0);
-        self.walk(o, d, tmin, tmax, mode, |tris, _, _| {
+        let mut mailbox = Mailbox::default();
+        self.walk(o, d, tmin, tmax, mode, |tris, ids, _| {
             leaves += 1;
-            tested += tris.len() as u32;
-            tris.iter()
-                .any(|t| ray_triangle(o, d, t.v0, t.e1, t.e2).is_some_and(|h| h > tmin && h < tmax))
+            tris.iter().zip(ids).any(|(t, &id)| {
+                let fresh = mailbox.first_visit(id);
+                tested += fresh as u32;
+                fresh && ray_triangle(o, d, t.v0, t.e1, t.e2).is_some_and(|h| h > tmin && h < tmax)
+            })
         });
         (leaves, tested)
     }
@@ -264,9 +272,11 @@ impl Octree {
         mode: Traversal,
     ) -> Option<(f32, u32)> {
         let mut best: Option<(f32, u32)> = None;
+        let mut mailbox = Mailbox::default();
         self.walk(o, d, tmin, tmax, mode, |tris, ids, t_exit| {
             for (t, &id) in tris.iter().zip(ids) {
-                if let Some(h) = ray_triangle(o, d, t.v0, t.e1, t.e2)
+                if mailbox.first_visit(id)
+                    && let Some(h) = ray_triangle(o, d, t.v0, t.e1, t.e2)
                     && h > tmin
                     && h < tmax
                     && best.is_none_or(|b| h < b.0)
@@ -280,6 +290,10 @@ impl Octree {
     }
 
     /// Visits the leaves crossed by the ray in order; `visit(tris, ids, t_exit)` returns true to stop.
+    ///
+    /// `path[l]` is the node at level `l` on the way from the root to the current leaf, so that
+    /// Samet's climb to the common ancestor is a look-up in `path` rather than a chain of
+    /// parent links through memory.
     #[inline]
     fn walk(
         &self,
@@ -295,51 +309,54 @@ impl Octree {
             return;
         };
         let n_cells = 1u32 << self.depth;
-        let p = o + d * t0;
-        let q = ((p - self.lo) / self.cell)
-            .floor()
-            .max(Vec3::ZERO)
-            .as_uvec3()
-            .min(UVec3::splat(n_cells - 1));
-        let mut leaf = self.descend(0, q);
+        let to_cell = |t: f32| ((o + d * t - self.lo) / self.cell).max(Vec3::ZERO);
+        // Truncation equals floor here: the coordinates are clamped to be non-negative.
+        let q = to_cell(t0).as_uvec3().min(UVec3::splat(n_cells - 1));
+        let mut path = [0u32; 21];
+        let mut level = self.descend(&mut path, 0, q);
+        let mut origin = q & UVec3::splat(!((1u32 << (self.depth - level)) - 1));
         loop {
-            let node = &self.nodes[leaf];
-            let r = node.first as usize..(node.first + node.count) as usize;
-            let size = 1u32 << (self.depth - node.level);
-            let (blo, bhi) = self.node_box(node);
+            let [first, count] = self.hot[path[level as usize] as usize];
+            let r = first as usize..(first + count) as usize;
+            let size = 1u32 << (self.depth - level);
+            let blo = self.lo + origin.as_vec3() * self.cell;
+            let bhi = blo + Vec3::splat(size as f32 * self.cell);
             let far = Vec3::select(d.cmpgt(Vec3::ZERO), bhi, blo);
             let texit = ((far - o) * inv).abs_nan_to_inf();
             let (t_exit, axis) = min_axis(texit);
             if visit(&self.tris[r.clone()], &self.ids[r], t_exit) || t_exit >= tmax {
                 return;
             }
-            // Integer cell just beyond the exit face, clamped to this leaf on the other axes.
-            let pe = ((o + d * t_exit - self.lo) / self.cell).floor();
-            let mut next = UVec3::ZERO;
-            for a in 0..3 {
-                let (lo_a, hi_a) = (node.origin[a], node.origin[a] + size - 1);
-                next[a] = if a == axis {
-                    if d[a] > 0.0 {
-                        if hi_a + 1 >= n_cells {
-                            return;
-                        }
-                        hi_a + 1
-                    } else {
-                        if lo_a == 0 {
-                            return;
-                        }
-                        lo_a - 1
-                    }
-                } else {
-                    (pe[a].max(0.0) as u32).clamp(lo_a, hi_a)
-                };
-            }
+            let Some(next) = self.exit_cell(to_cell(t_exit), d, axis, origin, size) else {
+                return;
+            };
             let start = match mode {
                 Traversal::Glassner => 0,
-                Traversal::Samet => self.common_ancestor(leaf, next),
+                Traversal::Samet => self.common_level(level, origin, next),
             };
-            leaf = self.descend(start, next);
+            level = self.descend(&mut path, start, next);
+            origin = next & UVec3::splat(!((1u32 << (self.depth - level)) - 1));
         }
+    }
+
+    /// Returns the integer cell just beyond the exit face on `axis` of the leaf at `origin`
+    /// (`size` cells wide), clamped to the leaf on the other axes; `None` past the root box.
+    /// `pe` is the exit point in (non-negative) cell coordinates.
+    #[inline]
+    fn exit_cell(&self, pe: Vec3, d: Vec3, axis: usize, origin: UVec3, size: u32) -> Option<UVec3> {
+        let n_cells = 1u32 << self.depth;
+        let mut next = UVec3::ZERO;
+        for a in 0..3 {
+            let (lo_a, hi_a) = (origin[a], origin[a] + size - 1);
+            next[a] = if a != axis {
+                (pe[a] as u32).clamp(lo_a, hi_a)
+            } else if d[a] > 0.0 {
+                (hi_a + 1 < n_cells).then_some(hi_a + 1)?
+            } else {
+                lo_a.checked_sub(1)?
+            };
+        }
+        Some(next)
     }
 
     /// Returns the parameter at which the ray enters the root box within `[tmin, tmax]`.
@@ -352,32 +369,62 @@ impl Octree {
         (t_near <= t_far).then_some(t_near)
     }
 
-    /// Climbs from `n` to the first ancestor whose box contains cell `q`.
+    /// Returns the level of the deepest ancestor of the leaf at (`level`, `origin`) whose box
+    /// contains cell `q`: the number of leading bits that `q` and `origin` share on every axis.
     #[inline]
-    fn common_ancestor(&self, mut n: usize, q: UVec3) -> usize {
-        loop {
-            let node = &self.nodes[n];
-            let size = 1u32 << (self.depth - node.level);
-            let rel = q.wrapping_sub(node.origin);
-            if (rel.cmplt(UVec3::splat(size))).all() || n == 0 {
-                return n;
-            }
-            n = node.parent as usize;
-        }
+    fn common_level(&self, level: u32, origin: UVec3, q: UVec3) -> u32 {
+        let diff = (q ^ origin).max_element();
+        let shared = diff.leading_zeros().saturating_sub(32 - self.depth);
+        shared.min(level)
     }
 
-    /// Descends from node `n` to the leaf containing cell `q`.
+    /// Descends from the node `path[level]` to the leaf containing cell `q`, recording the nodes
+    /// passed in `path`; returns the leaf's level.
     #[inline]
-    fn descend(&self, mut n: usize, q: UVec3) -> usize {
+    fn descend(&self, path: &mut [u32; 21], mut level: u32, q: UVec3) -> u32 {
+        let mut n = path[level as usize];
         loop {
-            let node = &self.nodes[n];
-            if node.count != INTERIOR {
-                return n;
+            let [first, count] = self.hot[n as usize];
+            if count != INTERIOR {
+                return level;
             }
-            let shift = self.depth - node.level - 1;
+            let shift = self.depth - level - 1;
             let b = (q >> shift) & UVec3::ONE;
-            n = node.first as usize + (b.x | (b.y << 1) | (b.z << 2)) as usize;
+            n = first + (b.x | (b.y << 1) | (b.z << 2));
+            level += 1;
+            path[level as usize] = n;
         }
+    }
+}
+
+/// The ids of the last few triangles a ray was tested against (mailboxing): a triangle lying
+/// in several voxels along the ray gives the same answer each time, so it is tested once.
+/// A ring of 8 misses some repeats but needs no per-triangle state, so queries stay shareable.
+#[derive(Clone, Copy)]
+struct Mailbox {
+    ids: [u32; 8],
+    next: usize,
+}
+
+impl Default for Mailbox {
+    fn default() -> Self {
+        Mailbox {
+            ids: [u32::MAX; 8],
+            next: 0,
+        }
+    }
+}
+
+impl Mailbox {
+    /// Returns false when `id` was seen recently; otherwise records it and returns true.
+    #[inline]
+    fn first_visit(&mut self, id: u32) -> bool {
+        if self.ids.contains(&id) {
+            return false;
+        }
+        self.ids[self.next & 7] = id;
+        self.next += 1;
+        true
     }
 }
 
