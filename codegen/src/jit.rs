@@ -13,6 +13,7 @@ use occ_runtime::abi::{ABI_TABLE, AbiType};
 use occ_runtime::intrinsic::{INTRINSICS, MachineType};
 
 use crate::error::CodegenError;
+use crate::native;
 
 /// A context pair reused between functions.
 pub struct FnContext {
@@ -30,6 +31,8 @@ pub struct Jit {
     pub imports: HashMap<&'static str, FuncId>,
     /// Intrinsic name to its import.
     pub intrinsics: HashMap<&'static str, FuncId>,
+    /// Native predefine helper name to its import (see [`crate::native`]).
+    pub natives: HashMap<&'static str, FuncId>,
     pool: Vec<FnContext>,
     next_name: u32,
 }
@@ -56,6 +59,9 @@ impl Jit {
         }
         for i in INTRINSICS {
             jb.symbol(intrinsic_symbol(i.name), i.addr);
+        }
+        for h in native::HELPERS {
+            jb.symbol(native::symbol(h.name), h.addr);
         }
         let mut module = JITModule::new(jb);
         // Step 3: declare the imports.
@@ -86,10 +92,12 @@ impl Jit {
                 .map_err(cl_err)?;
             intrinsics.insert(i.name, id);
         }
+        let natives = declare_natives(&mut module)?;
         Ok(Jit {
             module,
             imports,
             intrinsics,
+            natives,
             pool: Vec::new(),
             next_name: 0,
         })
@@ -146,6 +154,27 @@ impl Jit {
     pub fn finalize(&mut self) -> Result<(), CodegenError> {
         self.module.finalize_definitions().map_err(cl_err)
     }
+}
+
+/// Declares every native predefine helper: its arguments, then the output pointer.
+fn declare_natives(module: &mut JITModule) -> Result<HashMap<&'static str, FuncId>, CodegenError> {
+    let mut natives = HashMap::new();
+    for h in native::HELPERS {
+        let mut sig = module.make_signature();
+        sig.params.extend(h.args.iter().map(|a| {
+            AbiParam::new(match a {
+                native::Arg::Int => types::I64,
+                native::Arg::R32 => types::F32,
+                native::Arg::R64 => types::F64,
+            })
+        }));
+        sig.params.push(AbiParam::new(types::I64));
+        let id = module
+            .declare_function(&native::symbol(h.name), Linkage::Import, &sig)
+            .map_err(cl_err)?;
+        natives.insert(h.name, id);
+    }
+    Ok(natives)
 }
 
 fn intrinsic_symbol(name: &str) -> String {

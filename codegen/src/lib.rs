@@ -14,6 +14,7 @@ pub mod frame;
 pub mod jit;
 pub mod layout;
 pub mod lower;
+pub mod native;
 
 use std::sync::Arc;
 

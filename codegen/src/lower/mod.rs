@@ -9,6 +9,7 @@
 //! blocking points.
 
 mod alt;
+mod bits;
 mod call;
 mod decl;
 mod expr;

@@ -20,6 +20,9 @@ impl Tr<'_, '_> {
         for a in args {
             v.push(self.expr(a)?);
         }
+        if let Some(r) = self.bits_predefine(name, &v) {
+            return Ok(r);
+        }
         let ins = self.b.ins();
         let one = |v: Value| Ok(vec![v]);
         match (name, v.as_slice()) {
