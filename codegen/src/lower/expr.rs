@@ -136,6 +136,7 @@ impl Tr<'_, '_> {
             | ExprKind::Slice { .. }
             | ExprKind::Directed { .. } => self.place(e),
             ExprKind::Table(items) => self.table(items, ty, e),
+            ExprKind::Constructor { repl, value } => self.constructor(repl, value, ty, e),
             ExprKind::TypedTable { items, .. } => {
                 match crate::layout::record_fields(&self.cx.checked.types, &ty) {
                     Some(fields) => self.record_value(items, fields, ty, e),

@@ -11,6 +11,7 @@
 mod alt;
 mod bits;
 mod call;
+mod construct;
 mod decl;
 mod expr;
 mod io;
