@@ -258,6 +258,8 @@ impl Tr<'_, '_> {
             (false, false) => Ok(self.int_convert(v, from, to, span)),
             (false, true) => Ok(if from == Prim::Byte || from == Prim::Bool {
                 self.b.ins().fcvt_from_uint(tt, v)
+            } else if mode == ConvMode::Trunc {
+                self.int_to_real_trunc(v, tt)
             } else {
                 self.b.ins().fcvt_from_sint(tt, v)
             }),
@@ -285,6 +287,42 @@ impl Tr<'_, '_> {
             .b
             .ins()
             .bitcast(types::F32, cranelift_codegen::ir::MemFlagsData::new(), bits);
+        self.b.ins().select(away, r2, r)
+    }
+
+    /// A signed integer to REAL rounding toward zero: convert to nearest, then step one unit
+    /// toward zero if that rounded away from zero (found by converting back, saturating).
+    fn int_to_real_trunc(&mut self, v: Value, tt: types::Type) -> Value {
+        let w = if self.b.func.dfg.value_type(v) == types::I64 {
+            v
+        } else {
+            self.b.ins().sextend(types::I64, v)
+        };
+        let r = self.b.ins().fcvt_from_sint(tt, w);
+        let back = self.b.ins().fcvt_to_sint_sat(types::I64, r);
+        let pos = self.b.ins().icmp_imm_s(IntCC::SignedGreaterThan, w, 0);
+        let above = self.b.ins().icmp(IntCC::SignedGreaterThan, back, w);
+        let lim = if tt == types::F32 {
+            self.b.ins().f32const(2f32.powi(63))
+        } else {
+            self.b.ins().f64const(2f64.powi(63))
+        };
+        let sat = self.b.ins().fcmp(FloatCC::GreaterThanOrEqual, r, lim);
+        let up = self.b.ins().bor(above, sat);
+        let up = self.b.ins().band(pos, up);
+        let neg = self.b.ins().icmp_imm_s(IntCC::SignedLessThan, w, 0);
+        let below = self.b.ins().icmp(IntCC::SignedLessThan, back, w);
+        let down = self.b.ins().band(neg, below);
+        let away = self.b.ins().bor(up, down);
+        let it = if tt == types::F32 {
+            types::I32
+        } else {
+            types::I64
+        };
+        let flags = cranelift_codegen::ir::MemFlagsData::new();
+        let bits = self.b.ins().bitcast(it, flags, r);
+        let bits = self.b.ins().iadd_imm_s(bits, -1);
+        let r2 = self.b.ins().bitcast(tt, flags, bits);
         self.b.ins().select(away, r2, r)
     }
 
