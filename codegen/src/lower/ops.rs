@@ -8,7 +8,7 @@ use cranelift_codegen::ir::{
     types,
 };
 use occ_compiler::types::Prim;
-use occ_grammar::ast::{BinOp, ConvMode, Expr, Span};
+use occ_grammar::ast::{BinOp, ConvMode, Expr, ExprKind, Span};
 use occ_runtime::ErrorKind;
 
 use super::{Res, Tr};
@@ -19,6 +19,12 @@ impl Tr<'_, '_> {
     pub fn binary(&mut self, op: BinOp, lhs: &Expr, rhs: &Expr, e: &Expr) -> Res<Value> {
         if matches!(op, BinOp::And | BinOp::Or) {
             return self.short_circuit(op == BinOp::And, lhs, rhs);
+        }
+        if let (ExprKind::List(ls), ExprKind::List(rs)) = (&lhs.kind, &rhs.kind)
+            && matches!(op, BinOp::Eq | BinOp::Ne)
+            && ls.len() == rs.len()
+        {
+            return self.list_equal(op == BinOp::Eq, ls, rs, e);
         }
         let p = self.prim_of(lhs)?;
         let a = self.expr(lhs)?;
@@ -40,6 +46,21 @@ impl Tr<'_, '_> {
             BinOp::Shl | BinOp::Shr => self.shift(op, p, a, b, e.span),
             _ => self.arith(op, p, a, b, e.span),
         }
+    }
+
+    /// `(a, b) = (c, d)`: every pair equal (`<>`: some pair different). Each side is
+    /// evaluated in full; expressions have no side effects.
+    fn list_equal(&mut self, eq: bool, ls: &[Expr], rs: &[Expr], e: &Expr) -> Res<Value> {
+        let mut all = self.b.ins().iconst(types::I8, 1);
+        for (l, r) in ls.iter().zip(rs) {
+            let v = self.binary(BinOp::Eq, l, r, e)?;
+            all = self.b.ins().band(all, v);
+        }
+        Ok(if eq {
+            all
+        } else {
+            self.b.ins().bxor_imm_s(all, 1)
+        })
     }
 
     /// Makes `v` a value of Cranelift type `t` (sign-extending or truncating integers, promoting
