@@ -138,8 +138,20 @@ fn int_binary(op: BinOp, prim: Prim, x: i64, y: i64) -> Result<Value, ConstError
         BinOp::Shl | BinOp::Shr if !(0..=bits).contains(&b) => Err(ConstError::ShiftCount(y)),
         BinOp::Shl => Ok(Value::Int(wrap(prim, i128::from(unsigned(x)) << b))),
         BinOp::Shr => Ok(Value::Int(wrap(prim, i128::from(unsigned(x)) >> b))),
-        BinOp::After => Ok(Value::Bool(wrap(prim, a - b) > 0)),
+        // AFTER reads the wrapped difference as signed, BYTE included (whose values are unsigned).
+        BinOp::After => Ok(Value::Bool(signed_difference(prim, a - b) > 0)),
         _ => compare(op, a.cmp(&b)),
+    }
+}
+
+/// Wraps `v` to `prim`'s width and reads it as a signed number of that width (for BYTE too,
+/// whose values are otherwise unsigned): the difference that AFTER compares with zero.
+fn signed_difference(prim: Prim, v: i128) -> i64 {
+    let wrapped = wrap(prim, v);
+    if prim == Prim::Byte && wrapped >= 128 {
+        wrapped - 256
+    } else {
+        wrapped
     }
 }
 

@@ -89,6 +89,10 @@ fn after_is_modular() {
         Ok(Value::Bool(true))
     );
     assert_eq!(bin(BinOp::After, Int, 5, 5), Ok(Value::Bool(false)));
+    // BYTE differences are signed modulo 2^8 (cgtest66 BY-117).
+    assert_eq!(bin(BinOp::After, Byte, 6, 10), Ok(Value::Bool(false)));
+    assert_eq!(bin(BinOp::After, Byte, 10, 6), Ok(Value::Bool(true)));
+    assert_eq!(bin(BinOp::After, Byte, 5, 250), Ok(Value::Bool(true)));
     assert_eq!(
         bin(BinOp::Gt, Int, i32::MIN.into(), i32::MAX.into()),
         Ok(Value::Bool(false))
