@@ -63,11 +63,26 @@ impl Checked {
     }
 }
 
+/// A program that passed the front end: its parse (AST and source map) and the checker's tables.
+pub struct Front {
+    /// The preprocessed, parsed program.
+    pub parsed: occ_grammar::Parsed,
+    /// The checker's side tables for `parsed.program`.
+    pub checked: occ_compiler::CheckedProgram,
+}
+
 /// Checks the occam program rooted at `path`.
 pub fn check_file(path: &Path, options: &Options) -> Checked {
+    load(path, options).1
+}
+
+/// Loads, preprocesses, parses and checks the program rooted at `path`.
+///
+/// Returns the checked program when there are no errors, and every diagnostic (warnings too).
+pub fn load(path: &Path, options: &Options) -> (Option<Front>, Checked) {
     let text = match std::fs::read(path) {
         Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
-        Err(error) => return unreadable(path, &error),
+        Err(error) => return (None, unreadable(path, &error)),
     };
     let mut loader = FsLoader::new(options);
     let parsed = occ_grammar::parse_source(&path.display().to_string(), &text, &mut loader);
@@ -77,25 +92,41 @@ pub fn check_file(path: &Path, options: &Options) -> Checked {
         .map(|d| to_diag(d, &parsed))
         .collect();
 
-    // ---- The checker's diagnostics join here (filled in by the `check` helper). ----
     // The checker runs only on a complete tree: on a partial one every dropped declaration
     // would come back as a cascade of "not declared" errors. A complete tree may still carry
     // syntax errors that drop nothing (operators mixed without parentheses), so those and the
     // checker's errors are reported in one run.
+    let mut checked_program = None;
     if parsed.complete {
         let check_options = occ_compiler::Options::from_source(&text);
-        let (_, found) = occ_compiler::check_with(&parsed.program, check_options);
+        let (checked, found) = occ_compiler::check_with(&parsed.program, check_options);
         diagnostics.extend(found.iter().map(|d| {
             let severity = match d.severity {
                 occ_compiler::Severity::Error => Severity::Error,
                 occ_compiler::Severity::Warning => Severity::Warning,
             };
-            located(&parsed, severity, d.span, d.message(), d.label(), d.kind.help())
+            located(
+                &parsed,
+                severity,
+                d.span,
+                d.message(),
+                d.label(),
+                d.kind.help(),
+            )
         }));
+        checked_program = checked;
     }
 
     diagnostics.sort_by(|a, b| (&a.file, a.line).cmp(&(&b.file, b.line)));
-    Checked { diagnostics }
+    let checked = Checked { diagnostics };
+    let front = match checked_program {
+        Some(checked_program) if !checked.has_errors() => Some(Front {
+            parsed,
+            checked: checked_program,
+        }),
+        _ => None,
+    };
+    (front, checked)
 }
 
 /// Builds a `Diag` for a problem at `span` of the preprocessed text of `parsed`.
