@@ -5,33 +5,9 @@ use crate::types::Prim;
 
 pub use occ_grammar::ast::{BinOp, UnOp};
 
-/// Returns a binary operator as occam spells it.
+/// Returns a binary operator as occam spells it (the printer's spelling: one table for both).
 pub fn bin_symbol(op: BinOp) -> &'static str {
-    use BinOp::*;
-    match op {
-        Add => "+",
-        Sub => "-",
-        Mul => "*",
-        Div => "/",
-        Rem => "\\",
-        Plus => "PLUS",
-        Minus => "MINUS",
-        Times => "TIMES",
-        BitAnd => "/\\",
-        BitOr => "\\/",
-        Xor => "><",
-        Shl => "<<",
-        Shr => ">>",
-        And => "AND",
-        Or => "OR",
-        Eq => "=",
-        Ne => "<>",
-        Lt => "<",
-        Gt => ">",
-        Le => "<=",
-        Ge => ">=",
-        After => "AFTER",
-    }
+    occ_grammar::print::binop_text(op)
 }
 
 /// Reports whether the operator's result is BOOL whatever the operand type.
