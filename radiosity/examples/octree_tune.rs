@@ -37,7 +37,25 @@ fn main() {
             (o, b - o)
         })
         .collect();
-    for (max_leaf, max_depth) in [(6, 12), (8, 8), (12, 8), (16, 7), (24, 6), (4, 10)] {
+    // `octree_tune MAX_LEAF DEPTH` measures one setting; no arguments, a range of them.
+    let args: Vec<u32> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let settings = match args[..] {
+        [leaf, depth] => vec![(leaf as usize, depth)],
+        _ => vec![
+            (6, 12),
+            (8, 8),
+            (12, 8),
+            (16, 7),
+            (24, 6),
+            (32, 6),
+            (48, 5),
+            (4, 10),
+        ],
+    };
+    for (max_leaf, max_depth) in settings {
         let tree = Octree::build(
             &tris,
             OctreeConfig {
@@ -45,28 +63,35 @@ fn main() {
                 max_depth,
             },
         );
-        let (mut leaves, mut tested) = (0u64, 0u64);
+        let (mut leaves, mut boxes, mut tested) = (0u64, 0u64, 0u64);
         for (o, d) in &rays {
-            let (l, t) = tree.occlusion_cost(*o, *d, 0.0, 0.999, Traversal::Samet);
+            let (l, b, t) = tree.occlusion_cost(*o, *d, 0.0, 0.999, Traversal::Samet);
             leaves += l as u64;
+            boxes += b as u64;
             tested += t as u64;
         }
         let n = rays.len() as f64;
         println!(
-            "max_leaf {max_leaf} depth {max_depth} per ray: {:.1} leaves, {:.1} triangle tests",
+            "max_leaf {max_leaf} depth {max_depth} per ray: {:.1} leaves, {:.1} box groups, {:.1} packets tested",
             leaves as f64 / n,
+            boxes as f64 / n,
             tested as f64 / n
         );
-        for mode in [Traversal::Samet, Traversal::Glassner] {
+        for mode in [Traversal::Samet, Traversal::Ropes, Traversal::Glassner] {
             let (start, cpu_start) = (Instant::now(), cpu_seconds());
-            let hits = rays
-                .iter()
-                .filter(|(o, d)| tree.occluded(*o, *d, 0.0, 0.999, mode))
-                .count();
-            let s = start.elapsed().as_secs_f64();
+            // Five passes over the rays, so that the 10 ms CPU-time ticks do not dominate.
+            let hits = (0..5)
+                .map(|_| {
+                    rays.iter()
+                        .filter(|(o, d)| tree.occluded(*o, *d, 0.0, 0.999, mode))
+                        .count()
+                })
+                .sum::<usize>()
+                / 5;
+            let s = start.elapsed().as_secs_f64() / 5.0;
             let cpu = cpu_seconds().zip(cpu_start).map(|(b, a)| b - a);
             let per_cpu = cpu.map_or("n/a".to_string(), |c| {
-                format!("{:.2}", rays.len() as f64 / c / 1e6)
+                format!("{:.2}", 5.0 * rays.len() as f64 / c / 1e6)
             });
             println!(
                 "max_leaf {max_leaf:>2} depth {max_depth:>2} {mode:?}: {:.2} M rays/s wall, {per_cpu} M rays/CPU-s ({hits} occluded) {:?}",

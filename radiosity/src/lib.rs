@@ -22,6 +22,7 @@ pub mod kernels;
 pub mod mesh;
 pub mod octree;
 pub mod output;
+pub mod packet;
 pub mod rng;
 pub mod scene;
 pub mod solver;

@@ -1,7 +1,8 @@
 //! The octree over patches, flattened after building (pbrt's `flattenBVH` idea): nodes live in
 //! one array with the eight children of an interior node contiguous, and each leaf (voxel) embeds
-//! the geometry of its triangles in one contiguous run of [`PackedTri`]s, so that a voxel is one
-//! block of memory that can be shipped as one message and tested without further look-ups.
+//! the geometry of its triangles in one contiguous run of [`TriPacket`]s (four triangles each,
+//! tested at once) behind the boxes of those packets in [`BoxGroup`]s of four, so that a voxel is
+//! one block of memory that can be shipped as one message and tested without further look-ups.
 //!
 //! Traversal walks the voxels a ray crosses in order. Voxels are addressed by integer location
 //! codes on the finest grid (`2^depth` cells per axis), which makes neighbour finding exact:
@@ -9,6 +10,10 @@
 //!   just beyond it, climb to the nearest common ancestor (its level is the number of leading bits
 //!   the cell shares with the leaf's origin; the node itself is kept on the ray's root-to-leaf
 //!   path, so the climb reads no memory), then descend to the leaf holding it.
+//! - **Ropes**: Samet's neighbour finding done once per leaf face when the tree is built: each
+//!   leaf keeps, for each of its six faces, the neighbour of equal or greater size across it (a
+//!   "rope", Havran et al. 1998), so a step follows the rope and descends from there only when
+//!   the neighbour is subdivided. No climb, no root-to-leaf path.
 //! - **Glassner** (the comparison): the same step, but every descent starts at the root.
 //!
 //! Invariants:
@@ -17,40 +22,35 @@
 //! - a node's integer box is `origin .. origin + (1 << (depth - level))` on each axis;
 //! - children of node `n` are `nodes[n.first .. n.first + 8]`, ordered by `x | y << 1 | z << 2`.
 
-use glam::{UVec3, Vec3};
+use glam::{BVec3, UVec3, Vec3};
 
 use crate::geom::{Tri, ray_triangle};
-
-/// A triangle as a voxel stores it: one corner and the two edges from it (36 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PackedTri {
-    /// Corner 0.
-    pub v0: Vec3,
-    /// Corner 1 minus corner 0.
-    pub e1: Vec3,
-    /// Corner 2 minus corner 0.
-    pub e2: Vec3,
-}
+use crate::packet::{BoxGroup, LANES, NO_TRIANGLE, RayQuery, TriPacket};
 
 /// One flattened octree node.
 #[derive(Clone, Copy, Debug)]
 struct Node {
     origin: UVec3,
     level: u32,
-    /// Interior: index of the first of 8 children. Leaf: index of the first packed triangle.
+    /// Interior: index of the first of 8 children. Leaf: index of its first packet (a multiple
+    /// of [`LANES`]: a leaf's packets are padded to whole box groups).
     first: u32,
-    /// Number of triangles for a leaf; `INTERIOR` for an interior node.
+    /// Number of packets for a leaf; `INTERIOR` for an interior node.
     count: u32,
 }
 
 const INTERIOR: u32 = u32::MAX;
+
+/// A leaf face on the boundary of the root box has no neighbour.
+const NO_ROPE: u32 = u32::MAX;
 
 /// How the traversal finds the next voxel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Traversal {
     /// Samet's neighbour finding: climb to the common ancestor, then descend.
     Samet,
+    /// Samet's neighbours precomputed per leaf face (ropes), then a descent where needed.
+    Ropes,
     /// Glassner's top-down descent from the root at every step.
     Glassner,
 }
@@ -73,8 +73,8 @@ impl Default for OctreeConfig {
     }
 }
 
-/// A flattened octree over triangles. Each packed triangle remembers the id of its source
-/// triangle (its index in the slice given to [`Octree::build`]).
+/// A flattened octree over triangles. Each lane of a packet remembers the id of its source
+/// triangle (its index in the slice given to [`Octree::build`]), or [`NO_TRIANGLE`].
 #[derive(Clone, Debug)]
 pub struct Octree {
     lo: Vec3,
@@ -84,8 +84,13 @@ pub struct Octree {
     /// The traversal's copy of `nodes`: `[first, count]` only (8 bytes a node, so the whole tree
     /// stays in cache; origins and levels are recomputed from the cell being sought).
     hot: Vec<[u32; 2]>,
-    tris: Vec<PackedTri>,
-    ids: Vec<u32>,
+    /// For leaf `n`, `ropes[6 n + face]` is the neighbour of equal or greater size across `face`
+    /// (`2 axis + 1` for the face on the high side) as `node << 5 | level`, or [`NO_ROPE`].
+    ropes: Vec<u32>,
+    packets: Vec<TriPacket>,
+    ids: Vec<[u32; LANES]>,
+    /// `boxes[g]` holds the boxes of `packets[LANES g .. LANES (g + 1)]`.
+    boxes: Vec<BoxGroup>,
 }
 
 /// Statistics of a built octree.
@@ -97,6 +102,8 @@ pub struct OctreeStats {
     pub leaves: usize,
     /// Triangle references stored in leaves (a triangle overlapping several voxels counts in each).
     pub stored_triangles: usize,
+    /// Packets of four lanes holding them.
+    pub packets: usize,
     /// Deepest leaf level.
     pub max_level: u32,
 }
@@ -129,12 +136,17 @@ impl Octree {
                 count: 0,
             }],
             hot: Vec::new(),
-            tris: Vec::new(),
+            ropes: Vec::new(),
+            packets: Vec::new(),
             ids: Vec::new(),
+            boxes: Vec::new(),
         };
         let all: Vec<u32> = (0..tris.len() as u32).collect();
         tree.build_node(0, tris, all, config);
         tree.hot = tree.nodes.iter().map(|n| [n.first, n.count]).collect();
+        tree.ropes = (0..tree.nodes.len() * 6)
+            .map(|i| tree.rope(i / 6, i % 6))
+            .collect();
         tree
     }
 
@@ -143,6 +155,32 @@ impl Octree {
         let size = (1u32 << (self.depth - n.level)) as f32 * self.cell;
         let lo = self.lo + n.origin.as_vec3() * self.cell;
         (lo, lo + Vec3::splat(size))
+    }
+
+    /// Samet's neighbour of leaf `n` across `face` (see [`Octree::ropes`]): the deepest node no
+    /// deeper than the leaf whose box holds the cell just across the face.
+    fn rope(&self, n: usize, face: usize) -> u32 {
+        let node = self.nodes[n];
+        if node.count == INTERIOR {
+            return NO_ROPE;
+        }
+        let (axis, high) = (face / 2, face % 2 == 1);
+        let size = 1u32 << (self.depth - node.level);
+        let mut q = node.origin;
+        q[axis] = if high {
+            q[axis] + size
+        } else {
+            q[axis].wrapping_sub(1)
+        };
+        if q[axis] >= 1 << self.depth {
+            return NO_ROPE;
+        }
+        let mut path = [0u32; 21];
+        let (mut level, mut m) = (0, 0);
+        while level < node.level && self.nodes[m as usize].count == INTERIOR {
+            (level, m) = self.child_towards(&mut path, level, m, q);
+        }
+        (m << 5) | level
     }
 
     /// Fills node `index` with `members` (split or leaf).
@@ -189,16 +227,30 @@ impl Octree {
                 return;
             }
         }
-        self.nodes[index].first = self.tris.len() as u32;
-        self.nodes[index].count = members.len() as u32;
-        for i in members {
-            let t = &tris[i as usize];
-            self.tris.push(PackedTri {
-                v0: t.v[0],
-                e1: t.v[1] - t.v[0],
-                e2: t.v[2] - t.v[0],
-            });
-            self.ids.push(i);
+        self.nodes[index].first = self.packets.len() as u32;
+        self.nodes[index].count = members.len().div_ceil(LANES) as u32;
+        // Each packet's box is clipped to the leaf (a hit outside it is found in the leaf that
+        // holds it) and widened by a few ulps of the coordinates, so that rounding never drops
+        // a hit; it stays well under the offset that lifts ray origins off their surfaces.
+        let (lo, hi) = self.node_box(&node);
+        let margin = 1e-6 * (lo.abs().max(hi.abs()).max_element() + (hi - lo).max_element());
+        for chunk in members.chunks(LANES) {
+            let packet = TriPacket::pack(chunk.iter().map(|&i| &tris[i as usize]));
+            let (blo, bhi) = packet.bounds(chunk.len());
+            let lane = self.packets.len() % LANES;
+            if lane == 0 {
+                self.boxes.push(BoxGroup::EMPTY);
+            }
+            let group = self.boxes.last_mut().expect("a group was pushed");
+            group.set_lane(lane, blo.max(lo), bhi.min(hi), margin);
+            self.packets.push(packet);
+            let mut ids = [NO_TRIANGLE; LANES];
+            ids[..chunk.len()].copy_from_slice(chunk);
+            self.ids.push(ids);
+        }
+        while !self.packets.len().is_multiple_of(LANES) {
+            self.packets.push(TriPacket::EMPTY);
+            self.ids.push([NO_TRIANGLE; LANES]);
         }
     }
 
@@ -208,39 +260,60 @@ impl Octree {
         OctreeStats {
             nodes: self.nodes.len(),
             leaves: leaves.clone().count(),
-            stored_triangles: self.tris.len(),
+            stored_triangles: self
+                .ids
+                .iter()
+                .flatten()
+                .filter(|&&i| i != NO_TRIANGLE)
+                .count(),
+            packets: self.packets.len(),
             max_level: leaves.map(|n| n.level).max().unwrap_or(0),
         }
     }
 
-    /// Returns the triangles embedded in leaf (voxel) `leaf` and their source ids; empty for an
+    /// Returns the packets embedded in leaf (voxel) `leaf` and their source ids; empty for an
     /// interior node or an index out of range.
-    pub fn voxel(&self, leaf: usize) -> (&[PackedTri], &[u32]) {
+    pub fn voxel(&self, leaf: usize) -> (&[TriPacket], &[[u32; LANES]]) {
         match self.nodes.get(leaf) {
             Some(n) if n.count != INTERIOR => {
                 let r = n.first as usize..(n.first + n.count) as usize;
-                (&self.tris[r.clone()], &self.ids[r])
+                (&self.packets[r.clone()], &self.ids[r])
             }
             _ => (&[], &[]),
         }
     }
 
+    /// Calls `f(packet index)` for each packet of `leaf` (`[first, count]`) whose box the ray
+    /// may meet, until `f` returns true; returns whether it did.
+    #[inline(always)]
+    fn candidates(&self, leaf: [u32; 2], r: &RayQuery, mut f: impl FnMut(usize) -> bool) -> bool {
+        let g0 = leaf[0] as usize / LANES;
+        for g in g0..g0 + (leaf[1] as usize).div_ceil(LANES) {
+            let mut m = self.boxes[g].hits(r);
+            while m != 0 {
+                let lane = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if f(g * LANES + lane) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
     /// Returns true when some triangle is hit by `o + t d` with `tmin < t < tmax`.
     pub fn occluded(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32, mode: Traversal) -> bool {
+        let r = RayQuery::new(o, d, tmin, tmax);
         let mut hit = false;
-        let mut mailbox = Mailbox::default();
-        self.walk(o, d, tmin, tmax, mode, |tris, ids, _| {
-            hit = tris.iter().zip(ids).any(|(t, &id)| {
-                mailbox.first_visit(id)
-                    && ray_triangle(o, d, t.v0, t.e1, t.e2).is_some_and(|h| h > tmin && h < tmax)
-            });
+        self.walk(o, d, tmin, tmax, mode, |leaf, _| {
+            hit = self.candidates(leaf, &r, |i| self.packets[i].intersect(&r).0 != 0);
             hit
         });
         hit
     }
 
-    /// Returns `(leaves visited, triangles tested)` for an occlusion query (for measurements);
-    /// a triangle skipped by the mailbox is not counted as tested.
+    /// Returns `(leaves visited, box groups tested, packets tested)` for an occlusion query
+    /// (for measurements).
     pub fn occlusion_cost(
         &self,
         o: Vec3,
@@ -248,18 +321,18 @@ impl Octree {
         tmin: f32,
         tmax: f32,
         mode: Traversal,
-    ) -> (u32, u32) {
-        let (mut leaves, mut tested) = (0, 0);
-        let mut mailbox = Mailbox::default();
-        self.walk(o, d, tmin, tmax, mode, |tris, ids, _| {
+    ) -> (u32, u32, u32) {
+        let r = RayQuery::new(o, d, tmin, tmax);
+        let (mut leaves, mut groups, mut tested) = (0, 0, 0);
+        self.walk(o, d, tmin, tmax, mode, |leaf, _| {
             leaves += 1;
-            tris.iter().zip(ids).any(|(t, &id)| {
-                let fresh = mailbox.first_visit(id);
-                tested += fresh as u32;
-                fresh && ray_triangle(o, d, t.v0, t.e1, t.e2).is_some_and(|h| h > tmin && h < tmax)
+            groups += leaf[1].div_ceil(LANES as u32);
+            self.candidates(leaf, &r, |i| {
+                tested += 1;
+                self.packets[i].intersect(&r).0 != 0
             })
         });
-        (leaves, tested)
+        (leaves, groups, tested)
     }
 
     /// Returns the nearest hit `(t, triangle id)` of `o + t d` with `tmin < t < tmax`.
@@ -271,29 +344,27 @@ impl Octree {
         tmax: f32,
         mode: Traversal,
     ) -> Option<(f32, u32)> {
+        let r = RayQuery::new(o, d, tmin, tmax);
         let mut best: Option<(f32, u32)> = None;
-        let mut mailbox = Mailbox::default();
-        self.walk(o, d, tmin, tmax, mode, |tris, ids, t_exit| {
-            for (t, &id) in tris.iter().zip(ids) {
-                if mailbox.first_visit(id)
-                    && let Some(h) = ray_triangle(o, d, t.v0, t.e1, t.e2)
-                    && h > tmin
-                    && h < tmax
-                    && best.is_none_or(|b| h < b.0)
-                {
-                    best = Some((h, id));
+        self.walk(o, d, tmin, tmax, mode, |leaf, t_exit| {
+            self.candidates(leaf, &r, |i| {
+                let (mut mask, t) = self.packets[i].intersect(&r);
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if best.is_none_or(|b| t[lane] < b.0) {
+                        best = Some((t[lane], self.ids[i][lane]));
+                    }
                 }
-            }
+                false
+            });
             best.is_some_and(|b| b.0 <= t_exit)
         });
         best
     }
 
-    /// Visits the leaves crossed by the ray in order; `visit(tris, ids, t_exit)` returns true to stop.
-    ///
-    /// `path[l]` is the node at level `l` on the way from the root to the current leaf, so that
-    /// Samet's climb to the common ancestor is a look-up in `path` rather than a chain of
-    /// parent links through memory.
+    /// Visits the leaves crossed by the ray in order; `visit([first packet, packet count],
+    /// t_exit)` returns true to stop.
     #[inline]
     fn walk(
         &self,
@@ -302,61 +373,12 @@ impl Octree {
         tmin: f32,
         tmax: f32,
         mode: Traversal,
-        mut visit: impl FnMut(&[PackedTri], &[u32], f32) -> bool,
+        mut visit: impl FnMut([u32; 2], f32) -> bool,
     ) {
-        let inv = Vec3::ONE / d;
-        let Some(t0) = self.enter(o, inv, tmin, tmax) else {
+        let Some(mut w) = Walker::start(self, o, d, tmin, tmax) else {
             return;
         };
-        let n_cells = 1u32 << self.depth;
-        let to_cell = |t: f32| ((o + d * t - self.lo) / self.cell).max(Vec3::ZERO);
-        // Truncation equals floor here: the coordinates are clamped to be non-negative.
-        let q = to_cell(t0).as_uvec3().min(UVec3::splat(n_cells - 1));
-        let mut path = [0u32; 21];
-        let mut level = self.descend(&mut path, 0, q);
-        let mut origin = q & UVec3::splat(!((1u32 << (self.depth - level)) - 1));
-        loop {
-            let [first, count] = self.hot[path[level as usize] as usize];
-            let r = first as usize..(first + count) as usize;
-            let size = 1u32 << (self.depth - level);
-            let blo = self.lo + origin.as_vec3() * self.cell;
-            let bhi = blo + Vec3::splat(size as f32 * self.cell);
-            let far = Vec3::select(d.cmpgt(Vec3::ZERO), bhi, blo);
-            let texit = ((far - o) * inv).abs_nan_to_inf();
-            let (t_exit, axis) = min_axis(texit);
-            if visit(&self.tris[r.clone()], &self.ids[r], t_exit) || t_exit >= tmax {
-                return;
-            }
-            let Some(next) = self.exit_cell(to_cell(t_exit), d, axis, origin, size) else {
-                return;
-            };
-            let start = match mode {
-                Traversal::Glassner => 0,
-                Traversal::Samet => self.common_level(level, origin, next),
-            };
-            level = self.descend(&mut path, start, next);
-            origin = next & UVec3::splat(!((1u32 << (self.depth - level)) - 1));
-        }
-    }
-
-    /// Returns the integer cell just beyond the exit face on `axis` of the leaf at `origin`
-    /// (`size` cells wide), clamped to the leaf on the other axes; `None` past the root box.
-    /// `pe` is the exit point in (non-negative) cell coordinates.
-    #[inline]
-    fn exit_cell(&self, pe: Vec3, d: Vec3, axis: usize, origin: UVec3, size: u32) -> Option<UVec3> {
-        let n_cells = 1u32 << self.depth;
-        let mut next = UVec3::ZERO;
-        for a in 0..3 {
-            let (lo_a, hi_a) = (origin[a], origin[a] + size - 1);
-            next[a] = if a != axis {
-                (pe[a] as u32).clamp(lo_a, hi_a)
-            } else if d[a] > 0.0 {
-                (hi_a + 1 < n_cells).then_some(hi_a + 1)?
-            } else {
-                lo_a.checked_sub(1)?
-            };
-        }
-        Some(next)
+        while !visit(w.leaf, w.t_exit) && w.advance(self, mode) {}
     }
 
     /// Returns the parameter at which the ray enters the root box within `[tmin, tmax]`.
@@ -378,52 +400,153 @@ impl Octree {
         shared.min(level)
     }
 
-    /// Descends from the node `path[level]` to the leaf containing cell `q`, recording the nodes
-    /// passed in `path`; returns the leaf's level.
-    #[inline]
-    fn descend(&self, path: &mut [u32; 21], mut level: u32, q: UVec3) -> u32 {
-        let mut n = path[level as usize];
-        loop {
-            let [first, count] = self.hot[n as usize];
-            if count != INTERIOR {
-                return level;
-            }
-            let shift = self.depth - level - 1;
-            let b = (q >> shift) & UVec3::ONE;
-            n = first + (b.x | (b.y << 1) | (b.z << 2));
-            level += 1;
-            path[level as usize] = n;
+    /// Descends from node `n` at `level` to the leaf containing cell `q`, recording the nodes
+    /// passed in `path`; returns the leaf's level and index.
+    #[inline(always)]
+    fn descend(&self, path: &mut [u32; 21], mut level: u32, mut n: u32, q: UVec3) -> (u32, u32) {
+        while self.hot[n as usize][1] == INTERIOR {
+            (level, n) = self.child_towards(path, level, n, q);
         }
+        (level, n)
+    }
+
+    /// Steps from interior node `n` at `level` to its child holding cell `q`, recording it in
+    /// `path`.
+    #[inline(always)]
+    fn child_towards(&self, path: &mut [u32; 21], level: u32, n: u32, q: UVec3) -> (u32, u32) {
+        let shift = self.depth - level - 1;
+        let b = (q >> shift) & UVec3::ONE;
+        let child = self.hot[n as usize][0] + (b.x | (b.y << 1) | (b.z << 2));
+        path[level as usize + 1] = child;
+        (level + 1, child)
     }
 }
 
-/// The ids of the last few triangles a ray was tested against (mailboxing): a triangle lying
-/// in several voxels along the ray gives the same answer each time, so it is tested once.
-/// A ring of 8 misses some repeats but needs no per-triangle state, so queries stay shareable.
+/// One ray's walk through the leaves, in cell units (the finest grid), where a leaf's faces are
+/// integers: `c(t) = oc + dc t`.
+///
+/// `path[l]` is the node at level `l` on the way from the root to the current leaf, so that
+/// Samet's climb to the common ancestor is a look-up in `path` rather than a chain of parent
+/// links through memory. Each step is branch-free but for the descent: the exit face is chosen
+/// by a mask.
 #[derive(Clone, Copy)]
-struct Mailbox {
-    ids: [u32; 8],
-    next: usize,
+struct Walker {
+    oc: Vec3,
+    dc: Vec3,
+    inv_c: Vec3,
+    forward: BVec3,
+    moving: BVec3,
+    tmax: f32,
+    level: u32,
+    origin: UVec3,
+    /// The current leaf's node index.
+    node: u32,
+    /// The current leaf's `[first packet, packet count]`.
+    leaf: [u32; 2],
+    /// Where the ray leaves the current leaf.
+    t_exit: f32,
+    path: [u32; 21],
 }
 
-impl Default for Mailbox {
-    fn default() -> Self {
-        Mailbox {
-            ids: [u32::MAX; 8],
-            next: 0,
-        }
-    }
-}
-
-impl Mailbox {
-    /// Returns false when `id` was seen recently; otherwise records it and returns true.
+impl Walker {
+    /// Positions a walk at the leaf where `o + t d` enters the tree within `[tmin, tmax]`.
     #[inline]
-    fn first_visit(&mut self, id: u32) -> bool {
-        if self.ids.contains(&id) {
+    fn start(tree: &Octree, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Walker> {
+        let inv = Vec3::ONE / d;
+        let t0 = tree.enter(o, inv, tmin, tmax)?;
+        let mut w = Walker {
+            oc: (o - tree.lo) / tree.cell,
+            dc: d / tree.cell,
+            inv_c: inv * tree.cell,
+            forward: d.cmpgt(Vec3::ZERO),
+            moving: d.cmpne(Vec3::ZERO),
+            tmax,
+            level: 0,
+            origin: UVec3::ZERO,
+            node: 0,
+            leaf: [0, 0],
+            t_exit: 0.0,
+            path: [0; 21],
+        };
+        let q = w.cell_at(t0).min(UVec3::splat((1u32 << tree.depth) - 1));
+        w.enter(tree, 0, 0, q);
+        Some(w)
+    }
+
+    /// The cell holding the ray's point at `t` (truncation is floor: clamped non-negative).
+    #[inline(always)]
+    fn cell_at(&self, t: f32) -> UVec3 {
+        (self.oc + self.dc * t).max(Vec3::ZERO).as_uvec3()
+    }
+
+    /// Descends from node `n` at `level` to the leaf holding cell `q` and computes where the
+    /// ray leaves it.
+    #[inline(always)]
+    fn enter(&mut self, tree: &Octree, level: u32, n: u32, q: UVec3) {
+        (self.level, self.node) = tree.descend(&mut self.path, level, n, q);
+        let size = 1u32 << (tree.depth - self.level);
+        self.origin = q & UVec3::splat(!(size - 1));
+        self.leaf = tree.hot[self.node as usize];
+        let far = Vec3::select(
+            self.forward,
+            (self.origin + size).as_vec3(),
+            self.origin.as_vec3(),
+        );
+        let t = Vec3::select(
+            self.moving,
+            ((far - self.oc) * self.inv_c).max(Vec3::ZERO),
+            Vec3::INFINITY,
+        );
+        self.t_exit = t.min_element();
+    }
+
+    /// Steps to the next leaf along the ray; false when the ray has left the tree or passed
+    /// `tmax`.
+    #[inline(always)]
+    fn advance(&mut self, tree: &Octree, mode: Traversal) -> bool {
+        if self.t_exit >= self.tmax {
             return false;
         }
-        self.ids[self.next & 7] = id;
-        self.next += 1;
+        let size = 1u32 << (tree.depth - self.level);
+        let far = Vec3::select(
+            self.forward,
+            (self.origin + size).as_vec3(),
+            self.origin.as_vec3(),
+        );
+        let t = Vec3::select(
+            self.moving,
+            ((far - self.oc) * self.inv_c).max(Vec3::ZERO),
+            Vec3::INFINITY,
+        );
+        // The exit face: the first axis whose face the ray reaches at t_exit (an exit through
+        // an edge or corner steps across one face; the next step leaves at once across the other).
+        let axis = t.cmpeq(Vec3::splat(self.t_exit)).bitmask().trailing_zeros() as usize;
+        let exits = BVec3::new(axis == 0, axis == 1, axis == 2);
+        let across = UVec3::select(
+            self.forward,
+            self.origin + size,
+            self.origin.wrapping_sub(UVec3::ONE),
+        );
+        let inside = self
+            .cell_at(self.t_exit)
+            .clamp(self.origin, self.origin + (size - 1));
+        let next = UVec3::select(exits, across, inside);
+        if next.cmpge(UVec3::splat(1u32 << tree.depth)).any() {
+            return false;
+        }
+        let (level, n) = match mode {
+            Traversal::Glassner => (0, 0),
+            Traversal::Samet => {
+                let level = tree.common_level(self.level, self.origin, next);
+                (level, self.path[level as usize])
+            }
+            Traversal::Ropes => {
+                let face = 2 * axis + self.forward.test(axis) as usize;
+                let rope = tree.ropes[6 * self.node as usize + face];
+                (rope & 31, rope >> 5)
+            }
+        };
+        self.enter(tree, level, n, next);
         true
     }
 }
@@ -432,7 +555,6 @@ impl Mailbox {
 trait NanSafe {
     fn max_element_nan_safe(self) -> f32;
     fn min_element_nan_safe(self) -> f32;
-    fn abs_nan_to_inf(self) -> Vec3;
 }
 
 impl NanSafe for Vec3 {
@@ -448,42 +570,31 @@ impl NanSafe for Vec3 {
             .filter(|x| !x.is_nan())
             .fold(f32::INFINITY, f32::min)
     }
-    fn abs_nan_to_inf(self) -> Vec3 {
-        Vec3::from_array(self.to_array().map(|x| {
-            if x.is_nan() || x < 0.0 {
-                f32::INFINITY
-            } else {
-                x
-            }
-        }))
-    }
 }
 
-/// Returns the smallest component and its axis.
-#[inline]
-fn min_axis(v: Vec3) -> (f32, usize) {
-    if v.x <= v.y && v.x <= v.z {
-        (v.x, 0)
-    } else if v.y <= v.z {
-        (v.y, 1)
-    } else {
-        (v.z, 2)
-    }
-}
-
-/// Conservative triangle-box overlap: bounding boxes overlap and the triangle's plane crosses
-/// the box.
+/// Triangle-box overlap by the separating axis theorem (Akenine-Möller 2001): the box's three
+/// axes, the triangle's normal and the nine cross products of box axes and triangle edges. Each
+/// test keeps a small relative slack, so a triangle touching the box (or just missing it by
+/// rounding) is kept: the octree must be conservative, never the reverse.
 fn tri_overlaps_box(t: &Tri, lo: Vec3, hi: Vec3) -> bool {
-    let tlo = t.v[0].min(t.v[1]).min(t.v[2]);
-    let thi = t.v[0].max(t.v[1]).max(t.v[2]);
-    if tlo.cmpgt(hi).any() || thi.cmplt(lo).any() {
-        return false;
-    }
-    let n = t.cross();
     let c = (lo + hi) * 0.5;
     let e = (hi - lo) * 0.5;
-    let r = e.dot(n.abs());
-    n.dot(c - t.v[0]).abs() <= r * 1.0001 + 1e-12
+    let v = t.v.map(|p| p - c);
+    let separated = |axis: Vec3| {
+        let p = v.map(|p| p.dot(axis));
+        let r = e.dot(axis.abs());
+        let slack = 1e-5 * (r + p[0].abs().max(p[1].abs()).max(p[2].abs())) + 1e-30;
+        p[0].min(p[1]).min(p[2]) > r + slack || p[0].max(p[1]).max(p[2]) < -r - slack
+    };
+    let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+    let box_axes = [Vec3::X, Vec3::Y, Vec3::Z];
+    if box_axes.into_iter().any(separated) || separated(edges[0].cross(edges[1])) {
+        return false;
+    }
+    !box_axes
+        .iter()
+        .flat_map(|a| edges.map(|f| a.cross(f)))
+        .any(separated)
 }
 
 /// Returns true when any triangle in `tris` is hit with `tmin < t < tmax` (the brute-force

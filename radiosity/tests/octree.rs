@@ -1,5 +1,6 @@
 //! Seeded property tests of the octree: it answers exactly as a brute-force test of all
-//! triangles, Samet and Glassner traversals agree, and rays leaving a patch never hit it.
+//! triangles under every traversal (Samet, ropes, Glassner) and build setting, including rays
+//! that graze walls (where the packets' flat boxes decide), and rays leaving a patch never hit it.
 
 use glam::Vec3;
 use occ_radiosity::geom::Tri;
@@ -12,32 +13,86 @@ fn random_point(tris: &[Tri], rng: &mut Pcg32) -> (usize, Vec3) {
     (i, tris[i].sample(rng.next_f32(), rng.next_f32()))
 }
 
+const MODES: [Traversal; 3] = [Traversal::Samet, Traversal::Ropes, Traversal::Glassner];
+
+/// Build settings from many small voxels to few large ones.
+const SETTINGS: [(usize, u32); 3] = [(4, 10), (6, 12), (48, 5)];
+
 #[test]
 fn octree_equals_brute_force_between_random_surface_points() {
     let tris = cornell::grid_triangles(6).expect("cornell");
-    let tree = Octree::build(&tris, OctreeConfig::default());
-    let mut rng = Pcg32::new(42, 1);
-    let mut occluded = 0;
-    for _ in 0..3000 {
-        let (i, a) = random_point(&tris, &mut rng);
-        let (_, b) = random_point(&tris, &mut rng);
-        let o = a + tris[i].normal() * 1e-3;
-        let d = b - o;
-        let expected = occluded_brute_force(&tris, o, d, 0.0, 0.999);
-        assert_eq!(
-            tree.occluded(o, d, 0.0, 0.999, Traversal::Samet),
-            expected,
-            "{o} -> {b}"
+    for (max_leaf, max_depth) in SETTINGS {
+        let tree = Octree::build(
+            &tris,
+            OctreeConfig {
+                max_leaf,
+                max_depth,
+            },
         );
-        assert_eq!(
-            tree.occluded(o, d, 0.0, 0.999, Traversal::Glassner),
-            expected,
-            "{o} -> {b}"
-        );
-        occluded += expected as u32;
+        let mut rng = Pcg32::new(42, 1);
+        let mut occluded = 0;
+        for _ in 0..3000 {
+            let (i, a) = random_point(&tris, &mut rng);
+            let (_, b) = random_point(&tris, &mut rng);
+            let o = a + tris[i].normal() * 1e-3;
+            let d = b - o;
+            let expected = occluded_brute_force(&tris, o, d, 0.0, 0.999);
+            for mode in MODES {
+                assert_eq!(
+                    tree.occluded(o, d, 0.0, 0.999, mode),
+                    expected,
+                    "{mode:?} {max_leaf}/{max_depth}: {o} -> {b}"
+                );
+            }
+            occluded += expected as u32;
+        }
+        // The set mixes both answers (the blocks occlude a good share of the pairs).
+        assert!(occluded > 300 && occluded < 2700, "{occluded}");
     }
-    // The set mixes both answers (the blocks occlude a good share of the pairs).
-    assert!(occluded > 300 && occluded < 2700, "{occluded}");
+}
+
+#[test]
+fn rays_grazing_walls_equal_brute_force() {
+    // Rays parallel to the floor at heights from 1e-4 mm to 1 mm (and some exactly in it),
+    // along the floor's grid lines and across them: the voxels they cross hold the floor's flat
+    // boxes, and the answer must still be the brute-force one.
+    let tris = cornell::grid_triangles(6).expect("cornell");
+    let floor_y = tris
+        .iter()
+        .flat_map(|t| t.v)
+        .map(|v| v.y)
+        .fold(f32::INFINITY, f32::min);
+    for (max_leaf, max_depth) in SETTINGS {
+        let tree = Octree::build(
+            &tris,
+            OctreeConfig {
+                max_leaf,
+                max_depth,
+            },
+        );
+        let mut rng = Pcg32::new(77, 3);
+        for k in 0..2000 {
+            let h = [0.0, 1e-4, 1e-3, 1e-2, 1.0][k % 5];
+            let o = Vec3::new(
+                rng.next_f32() * 500.0 + 20.0,
+                floor_y + h,
+                rng.next_f32() * 500.0 + 20.0,
+            );
+            let d = if k % 3 == 0 {
+                Vec3::X * 600.0
+            } else {
+                Vec3::new(rng.next_f32() - 0.5, 0.0, rng.next_f32() - 0.5) * 800.0
+            };
+            let expected = occluded_brute_force(&tris, o, d, 0.0, 0.999);
+            for mode in MODES {
+                assert_eq!(
+                    tree.occluded(o, d, 0.0, 0.999, mode),
+                    expected,
+                    "{mode:?} {max_leaf}/{max_depth}: {o} + t {d}"
+                );
+            }
+        }
+    }
 }
 
 #[test]
@@ -71,8 +126,10 @@ fn first_hit_equals_brute_force_nearest() {
                     .map(|h| (h, i as u32))
             })
             .min_by(|a, b| a.0.total_cmp(&b.0));
-        let got = tree.first_hit(o, d, 0.0, 1.0, Traversal::Samet);
-        assert_eq!(got.map(|g| g.1), brute.map(|b| b.1), "ray {o} {d}");
+        for mode in MODES {
+            let got = tree.first_hit(o, d, 0.0, 1.0, mode);
+            assert_eq!(got.map(|g| g.1), brute.map(|b| b.1), "{mode:?} ray {o} {d}");
+        }
     }
 }
 
@@ -112,18 +169,17 @@ fn axis_parallel_and_degenerate_rays_terminate() {
     let o = Vec3::new(150.0, 450.0, 300.0);
     for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
         let expected = d != -Vec3::Z;
-        assert_eq!(
-            tree.occluded(o, d * 1000.0, 0.0, 1.0, Traversal::Samet),
-            expected,
-            "{d}"
-        );
-        assert_eq!(
-            tree.occluded(o, d * 1000.0, 0.0, 1.0, Traversal::Glassner),
-            expected,
-            "{d}"
-        );
+        for mode in MODES {
+            assert_eq!(
+                tree.occluded(o, d * 1000.0, 0.0, 1.0, mode),
+                expected,
+                "{mode:?} {d}"
+            );
+        }
     }
-    assert!(!tree.occluded(o, Vec3::ZERO, 0.0, 1.0, Traversal::Samet));
-    let outside = Vec3::new(-1e4, -1e4, -1e4);
-    assert!(!tree.occluded(outside, -Vec3::ONE, 0.0, 1e6, Traversal::Samet));
+    for mode in MODES {
+        assert!(!tree.occluded(o, Vec3::ZERO, 0.0, 1.0, mode));
+        let outside = Vec3::new(-1e4, -1e4, -1e4);
+        assert!(!tree.occluded(outside, -Vec3::ONE, 0.0, 1e6, mode));
+    }
 }
