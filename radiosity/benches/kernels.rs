@@ -1,7 +1,7 @@
 //! Criterion benchmarks of the kernels, single thread:
 //! - occlusion rays/s on the Cornell box with each quad split 18 × 18 (10,368 triangles), rays
 //!   between random surface points (origin lifted 1e-3 mm, tmax 0.999), as the Embree anchor
-//!   in notes/radiosity-references.md §5; Samet against Glassner traversal;
+//!   in notes/radiosity-references.md §5; Samet, ropes and Glassner traversal;
 //! - form factors/s (16 shadow rays each, Cornell box, light as source);
 //! - time to a converged Cornell box (reference solver; rayon uses the pool it is given, see
 //!   the `solve` group note).
@@ -65,6 +65,7 @@ fn occlusion(c: &mut Criterion) {
     group.sample_size(20);
     for (name, mode) in [
         ("samet", Traversal::Samet),
+        ("ropes", Traversal::Ropes),
         ("glassner", Traversal::Glassner),
     ] {
         group.bench_function(name, |b| {
