@@ -378,15 +378,16 @@ impl Octree {
         mode: Traversal,
         visit: impl FnMut([u32; 2], f32) -> bool,
     ) {
-        let Some(mut w) = Walker::start(self, o, d, tmin, tmax) else {
+        let mut path = [0u32; 21];
+        let Some(mut w) = Walker::start(self, &mut path, o, d, tmin, tmax) else {
             return;
         };
         // One loop per traversal, so that the step is specialised and the choice is not made
         // again at every voxel.
         match mode {
-            Traversal::Samet => w.run::<SAMET>(self, visit),
-            Traversal::Ropes => w.run::<ROPES>(self, visit),
-            Traversal::Glassner => w.run::<GLASSNER>(self, visit),
+            Traversal::Samet => w.run::<SAMET>(self, &mut path, visit),
+            Traversal::Ropes => w.run::<ROPES>(self, &mut path, visit),
+            Traversal::Glassner => w.run::<GLASSNER>(self, &mut path, visit),
         }
     }
 
@@ -417,7 +418,7 @@ impl Octree {
     /// Descends from node `n` at `level` to the leaf containing cell `q`, recording the nodes
     /// passed in `path`; returns the leaf's level and index.
     #[inline(always)]
-    fn descend(&self, path: &mut [u32; 21], mut level: u32, mut n: u32, q: UVec3) -> (u32, u32) {
+    fn descend(&self, path: &mut Path, mut level: u32, mut n: u32, q: UVec3) -> (u32, u32) {
         while self.hot[n as usize][1] == INTERIOR {
             (level, n) = self.child_towards(path, level, n, q);
         }
@@ -427,7 +428,7 @@ impl Octree {
     /// Steps from interior node `n` at `level` to its child holding cell `q`, recording it in
     /// `path`.
     #[inline(always)]
-    fn child_towards(&self, path: &mut [u32; 21], level: u32, n: u32, q: UVec3) -> (u32, u32) {
+    fn child_towards(&self, path: &mut Path, level: u32, n: u32, q: UVec3) -> (u32, u32) {
         let shift = self.depth - level - 1;
         let b = (q >> shift) & UVec3::ONE;
         let child = self.hot[n as usize][0] + (b.x | (b.y << 1) | (b.z << 2));
@@ -444,9 +445,9 @@ const GLASSNER: u8 = 2;
 /// One ray's walk through the leaves, in cell units (the finest grid), where a leaf's faces are
 /// integers: `c(t) = oc + dc t`.
 ///
-/// `path[l]` is the node at level `l` on the way from the root to the current leaf, so that
-/// Samet's climb to the common ancestor is a look-up in `path` rather than a chain of parent
-/// links through memory. Each step is branch-free but for the descent: the exit face is chosen
+/// The walk keeps `path[l]`, the node at level `l` on the way from the root to the current leaf
+/// (outside the walker, so that it is not copied), so that Samet's climb to the common ancestor
+/// is a look-up in `path` rather than a chain of parent links through memory. Each step is branch-free but for the descent: the exit face is chosen
 /// by a mask.
 #[derive(Clone, Copy)]
 struct Walker {
@@ -466,13 +467,22 @@ struct Walker {
     t_exit: f32,
     /// The axis of the face it leaves through.
     axis: usize,
-    path: [u32; 21],
 }
+
+/// The nodes from the root to the current leaf, by level.
+type Path = [u32; 21];
 
 impl Walker {
     /// Positions a walk at the leaf where `o + t d` enters the tree within `[tmin, tmax]`.
-    #[inline]
-    fn start(tree: &Octree, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Walker> {
+    #[inline(always)]
+    fn start(
+        tree: &Octree,
+        path: &mut Path,
+        o: Vec3,
+        d: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<Walker> {
         let inv = Vec3::ONE / d;
         let t0 = tree.enter(o, inv, tmin, tmax)?;
         let mut w = Walker {
@@ -488,10 +498,9 @@ impl Walker {
             leaf: [0, 0],
             t_exit: 0.0,
             axis: 0,
-            path: [0; 21],
         };
         let q = w.cell_at(t0).min(UVec3::splat((1u32 << tree.depth) - 1));
-        w.enter(tree, 0, 0, q);
+        w.enter(tree, path, 0, 0, q);
         Some(w)
     }
 
@@ -504,8 +513,8 @@ impl Walker {
     /// Descends from node `n` at `level` to the leaf holding cell `q` and computes where the
     /// ray leaves it.
     #[inline(always)]
-    fn enter(&mut self, tree: &Octree, level: u32, n: u32, q: UVec3) {
-        (self.level, self.node) = tree.descend(&mut self.path, level, n, q);
+    fn enter(&mut self, tree: &Octree, path: &mut Path, level: u32, n: u32, q: UVec3) {
+        (self.level, self.node) = tree.descend(path, level, n, q);
         let size = 1u32 << (tree.depth - self.level);
         self.origin = q & UVec3::splat(!(size - 1));
         self.leaf = tree.hot[self.node as usize];
@@ -528,14 +537,19 @@ impl Walker {
     /// Visits the leaves from here on; `visit([first packet, packet count], t_exit)` returns
     /// true to stop.
     #[inline(always)]
-    fn run<const MODE: u8>(&mut self, tree: &Octree, mut visit: impl FnMut([u32; 2], f32) -> bool) {
-        while !visit(self.leaf, self.t_exit) && self.advance::<MODE>(tree) {}
+    fn run<const MODE: u8>(
+        &mut self,
+        tree: &Octree,
+        path: &mut Path,
+        mut visit: impl FnMut([u32; 2], f32) -> bool,
+    ) {
+        while !visit(self.leaf, self.t_exit) && self.advance::<MODE>(tree, path) {}
     }
 
     /// Steps to the next leaf along the ray; false when the ray has left the tree or passed
     /// `tmax`.
     #[inline(always)]
-    fn advance<const MODE: u8>(&mut self, tree: &Octree) -> bool {
+    fn advance<const MODE: u8>(&mut self, tree: &Octree, path: &mut Path) -> bool {
         if self.t_exit >= self.tmax {
             return false;
         }
@@ -557,7 +571,7 @@ impl Walker {
         let (level, n) = match MODE {
             SAMET => {
                 let level = tree.common_level(self.level, self.origin, next);
-                (level, self.path[level as usize])
+                (level, path[level as usize])
             }
             ROPES => {
                 let face = 2 * axis + self.forward.test(axis) as usize;
@@ -566,7 +580,7 @@ impl Walker {
             }
             _ => (0, 0),
         };
-        self.enter(tree, level, n, next);
+        self.enter(tree, path, level, n, next);
         true
     }
 }
