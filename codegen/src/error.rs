@@ -25,6 +25,17 @@ pub enum CodegenError {
         /// What was missing.
         what: String,
     },
+    /// Occurs when a `#PRAGMA EXTERNAL` routine is called but no linked intrinsic table has it,
+    /// or when its occam signature disagrees with the table's (see `crate::link`).
+    #[error("{file}:{line}: {what}")]
+    Link {
+        /// Source file.
+        file: String,
+        /// 1-based line.
+        line: u32,
+        /// The problem.
+        what: String,
+    },
     /// Occurs when the program has no top-level PROC to run.
     #[error("the program has no top-level PROC to run")]
     NoEntry,

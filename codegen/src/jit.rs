@@ -1,4 +1,5 @@
-//! The JIT: one `JITModule` (opt_level speed) with every [`ABI_TABLE`] entry imported by name, and a
+//! The JIT: one `JITModule` (opt_level speed) with every [`ABI_TABLE`] entry and every intrinsic of
+//! the program's [`IntrinsicSet`] imported by name, and a
 //! pool of reusable `codegen::Context`/`FunctionBuilderContext` pairs (one per nesting level of
 //! functions being lowered at the same time), in the shape of cranelift-jit-demo's `jit.rs`.
 
@@ -10,7 +11,7 @@ use cranelift_frontend::FunctionBuilderContext;
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{FuncId, Linkage, Module, default_libcall_names};
 use occ_runtime::abi::{ABI_TABLE, AbiType};
-use occ_runtime::intrinsic::{INTRINSICS, MachineType};
+use occ_runtime::intrinsic::{IntrinsicSet, MachineType};
 
 use crate::error::CodegenError;
 use crate::native;
@@ -42,8 +43,9 @@ fn cl_err(e: impl std::fmt::Display) -> CodegenError {
 }
 
 impl Jit {
-    /// Creates the module and declares every runtime entry and intrinsic as an import.
-    pub fn new() -> Result<Jit, CodegenError> {
+    /// Creates the module and declares every runtime entry and every intrinsic of `set` as an
+    /// import.
+    pub fn new(set: &IntrinsicSet) -> Result<Jit, CodegenError> {
         // Step 1: the ISA, optimising for speed (Cranelift's default is "none").
         let mut flags = settings::builder();
         flags.set("opt_level", "speed").map_err(cl_err)?;
@@ -57,7 +59,7 @@ impl Jit {
         for e in ABI_TABLE {
             jb.symbol(e.name, e.addr);
         }
-        for i in INTRINSICS {
+        for i in set.iter() {
             jb.symbol(intrinsic_symbol(i.name), i.addr);
         }
         for h in native::HELPERS {
@@ -78,7 +80,7 @@ impl Jit {
             imports.insert(e.name, id);
         }
         let mut intrinsics = HashMap::new();
-        for i in INTRINSICS {
+        for i in set.iter() {
             let mut sig = module.make_signature();
             sig.params.extend(
                 i.machine_params()

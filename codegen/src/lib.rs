@@ -13,6 +13,7 @@ pub mod error;
 pub mod frame;
 pub mod jit;
 pub mod layout;
+pub mod link;
 pub mod lower;
 pub mod native;
 
@@ -23,6 +24,7 @@ use occ_compiler::types::{ChanProtocol, Prim, ProtocolItem, Type};
 use occ_grammar::ast::{self, DeclKind};
 use occ_grammar::source_map::SourceMap;
 use occ_runtime::abi::{ProcFn, Word};
+pub use occ_runtime::intrinsic::IntrinsicSet;
 use occ_runtime::program::ProcInfo;
 use occ_runtime::{HostIo, Node, NodeConfig, ProgramInfo, RunError, Stats};
 
@@ -54,14 +56,27 @@ impl Drop for Compiled {
     }
 }
 
-/// Compiles `program` (checked as `checked`, spans mapped by `map`); the entry point is its last
-/// top-level PROC, which must take up to three `CHAN BYTE` parameters (keyboard, screen, error).
+/// Compiles `program` (checked as `checked`, spans mapped by `map`) with the runtime's own
+/// intrinsics only; see [`compile_with`].
 pub fn compile(
     program: &ast::Program,
     checked: &CheckedProgram,
     map: &SourceMap,
 ) -> Result<Compiled, CodegenError> {
-    let mut cx = Compiler::new(checked, map)?;
+    compile_with(program, checked, map, &IntrinsicSet::new())
+}
+
+/// Compiles `program` (checked as `checked`, spans mapped by `map`), binding its
+/// `#PRAGMA EXTERNAL` routines to the intrinsics of `intrinsics` ([`link`]); the entry point is
+/// its last top-level PROC, which must take up to three `CHAN BYTE` parameters (keyboard,
+/// screen, error).
+pub fn compile_with(
+    program: &ast::Program,
+    checked: &CheckedProgram,
+    map: &SourceMap,
+    intrinsics: &IntrinsicSet,
+) -> Result<Compiled, CodegenError> {
+    let mut cx = Compiler::new(checked, map, intrinsics)?;
     let mut entry = None;
     for d in &program.decls {
         match &d.kind {

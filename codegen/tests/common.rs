@@ -22,9 +22,10 @@ impl std::io::Write for Buf {
     }
 }
 
-struct Loader;
+/// Loads includes from the workspace's `stdlib/`.
+pub struct StdlibLoader;
 
-impl occ_grammar::preprocess::Loader for Loader {
+impl occ_grammar::preprocess::Loader for StdlibLoader {
     fn load(&mut self, name: &str, _from: &str) -> Option<(String, String)> {
         let p = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../stdlib")
@@ -37,7 +38,7 @@ impl occ_grammar::preprocess::Loader for Loader {
 
 /// Compiles `src`; panics with the diagnostics if it does not compile.
 pub fn compile(src: &str) -> occ_codegen::Compiled {
-    let parsed = occ_grammar::parse_source("test.occ", src, &mut Loader);
+    let parsed = occ_grammar::parse_source("test.occ", src, &mut StdlibLoader);
     assert!(
         !parsed.has_errors(),
         "parse errors: {:?}",

@@ -66,6 +66,9 @@ pub enum SymbolKind {
     Protocol(ProtocolId),
     /// A predefined routine.
     Predefined(&'static Predefined),
+    /// A routine declared by `#PRAGMA EXTERNAL` (a PROC when its [`ProcInfo::results`] is
+    /// empty, else a FUNCTION), implemented by a native intrinsic the driver links in.
+    External(ProcId),
 }
 
 /// One declared name.

@@ -81,6 +81,24 @@ pub struct Pragma {
     pub names: Vec<Name>,
     /// The whole directive.
     pub span: Span,
+    /// For `#PRAGMA EXTERNAL`, the declared routine (`None` when its header did not parse).
+    pub external: Option<External>,
+}
+
+/// A routine declared by `#PRAGMA EXTERNAL "header = N"` (KRoC's form): a PROC or FUNCTION
+/// header without a body, implemented by a native intrinsic the driver links in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct External {
+    /// The routine's name (its span is inside the pragma's string).
+    pub name: Name,
+    /// The result types: empty for a PROC, one or more for a FUNCTION.
+    pub results: Vec<Ty>,
+    /// The formal parameters, one per name.
+    pub params: Vec<Param>,
+    /// The number after `=` (KRoC's workspace size; occ ignores it).
+    pub workspace: i64,
+    /// The header text inside the quotes.
+    pub header: Span,
 }
 
 /// The pragmas the checker honours.
@@ -90,6 +108,9 @@ pub enum PragmaKind {
     Shared,
     /// `#PRAGMA PERMITALIASES x`: aliases of `x` are not errors.
     PermitAliases,
+    /// `#PRAGMA EXTERNAL "PROC NAME (params) = N"`: declares a routine implemented natively
+    /// (see [`Pragma::external`]; `names` holds its name).
+    External,
 }
 
 /// A type as written.

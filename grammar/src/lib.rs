@@ -18,6 +18,7 @@
 mod actions;
 pub mod ast;
 pub mod diagnostic;
+pub mod external;
 pub mod layout;
 pub mod lexer;
 pub mod parser;
@@ -59,18 +60,43 @@ pub fn parse_source(path: &str, text: &str, loader: &mut dyn preprocess::Loader)
     let pre = preprocess::preprocess(path, text, loader);
     let parse = parser::parse(&pre.text);
     let mut program = parse.program;
-    program.pragmas = pre.pragmas;
+    let mut pragmas = pre.pragmas;
+    let externals_parsed = parse_externals(&pre.externals, &mut pragmas);
+    program.pragmas = pragmas;
     let preprocessed_all = pre
         .diagnostics
         .iter()
         .all(|d| d.severity != diagnostic::Severity::Error);
     let mut diagnostics = pre.diagnostics;
     diagnostics.extend(parse.diagnostics);
+    let externals_ok = externals_parsed.is_empty();
+    diagnostics.extend(externals_parsed);
     Parsed {
         program,
         text: pre.text,
         map: pre.map,
         diagnostics,
-        complete: preprocessed_all && parse.complete,
+        complete: preprocessed_all && parse.complete && externals_ok,
     }
+}
+
+/// Parses the header of every `#PRAGMA EXTERNAL` into its pragma; returns the diagnostics of
+/// the headers that did not parse. A program with a bad header is not complete (its calls
+/// would all be "not declared").
+fn parse_externals(
+    texts: &[external::ExternalText],
+    pragmas: &mut [ast::Pragma],
+) -> Vec<Diagnostic> {
+    let mut errors = Vec::new();
+    for t in texts {
+        match (external::parse(t), pragmas.get_mut(t.pragma)) {
+            (Ok(e), Some(p)) => {
+                p.names = vec![e.name.clone()];
+                p.external = Some(e);
+            }
+            (Err(mut found), _) => errors.append(&mut found),
+            (Ok(_), None) => {}
+        }
+    }
+    errors
 }

@@ -85,6 +85,10 @@ impl Tr<'_, '_> {
         let entry = match st {
             Some(Storage::Proc(e)) => e,
             _ => {
+                if let Some(i) = self.cx.externals.get(&sym).copied() {
+                    self.call_intrinsic(i, args, span)?;
+                    return Ok(());
+                }
                 if let Some(i) = intrinsic::intrinsic(&name.text) {
                     self.call_intrinsic(i, args, span)?;
                     return Ok(());
@@ -169,6 +173,9 @@ impl Tr<'_, '_> {
     /// Lowers a FUNCTION call (inline expansion) and returns its results.
     pub fn call_function(&mut self, name: &Name, args: &[Expr], span: Span) -> Res<Vec<Value>> {
         let sym = self.cx.symbol(name)?;
+        if let Some(i) = self.cx.externals.get(&sym).copied() {
+            return self.call_intrinsic(i, args, span);
+        }
         if let Some(i) = intrinsic::intrinsic(&name.text) {
             return self.call_intrinsic(i, args, span);
         }
@@ -265,13 +272,17 @@ impl Tr<'_, '_> {
         r
     }
 
-    /// Calls a native intrinsic with occam actuals.
+    /// Calls a native intrinsic with occam actuals (arrays by address and length, written
+    /// scalars through a word temporary copied back after the call).
     fn call_intrinsic(
         &mut self,
         i: &'static intrinsic::Intrinsic,
         args: &[Expr],
         span: Span,
     ) -> Res<Vec<Value>> {
+        if args.len() != i.params.len() {
+            return Err(self.cx.internal(span, "intrinsic argument count"));
+        }
         let mut vals = Vec::new();
         for (k, a) in i.params.iter().zip(args) {
             match k {
@@ -280,34 +291,56 @@ impl Tr<'_, '_> {
                     vals.push(self.widen_i64(v, a));
                 }
                 ParamKind::ValReal32 | ParamKind::ValReal64 => vals.push(self.expr(a)?),
-                ParamKind::ValBytes | ParamKind::VarBytes | ParamKind::ValReal64s => {
-                    let l = self.place(a)?;
-                    vals.push(l.addr);
-                    vals.push(l.dims.first().copied().unwrap_or_else(|| self.iconst(0)));
-                }
-                ParamKind::ResultInt => {
-                    // The runtime writes a whole word; go through a temporary.
+                ParamKind::ResultInt | ParamKind::ResultReal32 | ParamKind::ResultBool => {
+                    // The intrinsic writes a temporary word; it is copied back below.
                     let off = self.frame.alloc(8);
                     let t = self.local_addr(off);
                     vals.push(t);
                 }
+                _ => {
+                    let l = self.place(a)?;
+                    vals.push(l.addr);
+                    vals.push(l.dims.first().copied().unwrap_or_else(|| self.iconst(0)));
+                }
             }
         }
-        let id = self.cx.jit.intrinsics[i.name];
+        let Some(&id) = self.cx.jit.intrinsics.get(i.name) else {
+            return Err(self.cx.internal(span, "intrinsic not declared in the JIT"));
+        };
         let f = self.cx.jit.module.declare_func_in_func(id, self.b.func);
         let c = self.b.ins().call(f, &vals);
-        // Copy word results back to their INT variables.
+        let results = self.b.inst_results(c).to_vec();
+        self.copy_back(i, args, &vals)?;
+        Ok(results)
+    }
+
+    /// Copies written scalar results from their temporaries to the actual variables.
+    fn copy_back(&mut self, i: &intrinsic::Intrinsic, args: &[Expr], vals: &[Value]) -> Res<()> {
         let mut vi = 0;
         for (k, a) in i.params.iter().zip(args) {
-            if *k == ParamKind::ResultInt {
-                let w = self.b.ins().load(types::I64, mem(), vals[vi], 0);
-                let w = self.b.ins().ireduce(types::I32, w);
+            let v = match k {
+                ParamKind::ResultInt => {
+                    let w = self.b.ins().load(types::I64, mem(), vals[vi], 0);
+                    let t = crate::layout::cl_type(self.prim_of(a)?);
+                    Some(if t == types::I64 {
+                        w
+                    } else {
+                        self.b.ins().ireduce(t, w)
+                    })
+                }
+                ParamKind::ResultBool => {
+                    let w = self.b.ins().load(types::I64, mem(), vals[vi], 0);
+                    Some(self.b.ins().ireduce(types::I8, w))
+                }
+                ParamKind::ResultReal32 => Some(self.b.ins().load(types::F32, mem(), vals[vi], 0)),
+                _ => None,
+            };
+            if let Some(v) = v {
                 let l = self.place(a)?;
-                self.store_scalar(w, l.addr);
+                self.store_scalar(v, l.addr);
             }
             vi += k.machine().len();
         }
-        let _ = span;
-        Ok(self.b.inst_results(c).to_vec())
+        Ok(())
     }
 }

@@ -88,6 +88,19 @@ pub struct ProcEntry {
     pub param_types: Vec<Type>,
 }
 
+/// The (file, line) of a span in `map`.
+fn file_line(map: &SourceMap, span: Span) -> (String, u32) {
+    match map.locate(span) {
+        Some(l) => (
+            map.files
+                .get(l.file)
+                .map_or_else(String::new, |f| f.path.clone()),
+            l.line as u32,
+        ),
+        None => (String::from("?"), 0),
+    }
+}
+
 /// Whole-program lowering state.
 pub struct Compiler<'p> {
     /// The checked program.
@@ -108,17 +121,34 @@ pub struct Compiler<'p> {
     pub funcs: Vec<(FuncId, String, Vec<u32>, Vec<ChannelName>)>,
     /// The name of the PROC being compiled (PAR branches report it).
     pub proc_name: String,
+    /// Each `#PRAGMA EXTERNAL` routine's intrinsic (see [`crate::link`]).
+    pub externals: HashMap<SymbolId, &'static occ_runtime::intrinsic::Intrinsic>,
     locations: HashMap<(usize, usize), u32>,
 }
 
 impl<'p> Compiler<'p> {
-    /// Starts compiling `checked` (spans mapped through `map`).
-    pub fn new(checked: &'p CheckedProgram, map: &'p SourceMap) -> Res<Compiler<'p>> {
+    /// Starts compiling `checked` (spans mapped through `map`) with the intrinsics of `set`;
+    /// fails on the first EXTERNAL that cannot be bound (see [`crate::link`]).
+    pub fn new(
+        checked: &'p CheckedProgram,
+        map: &'p SourceMap,
+        set: &occ_runtime::intrinsic::IntrinsicSet,
+    ) -> Res<Compiler<'p>> {
         let decl_syms = checked.symbols.iter().map(|(id, s)| (s.span, id)).collect();
+        let bindings = crate::link::bind_externals(checked, set);
+        if let Some(e) = bindings.errors.first() {
+            let (file, line) = file_line(map, e.span);
+            return Err(CodegenError::Link {
+                file,
+                line,
+                what: e.message.clone(),
+            });
+        }
         Ok(Compiler {
             checked,
             map,
-            jit: Jit::new()?,
+            jit: Jit::new(set)?,
+            externals: bindings.bound,
             env: HashMap::new(),
             decl_syms,
             info: ProgramInfo::default(),
@@ -131,16 +161,7 @@ impl<'p> Compiler<'p> {
 
     /// The (file, line) of a span.
     pub fn file_line(&self, span: Span) -> (String, u32) {
-        match self.map.locate(span) {
-            Some(l) => (
-                self.map
-                    .files
-                    .get(l.file)
-                    .map_or_else(String::new, |f| f.path.clone()),
-                l.line as u32,
-            ),
-            None => (String::from("?"), 0),
-        }
+        file_line(self.map, span)
     }
 
     /// The location index (for `rt_error` and resume tables) of a span.

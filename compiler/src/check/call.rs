@@ -211,6 +211,11 @@ impl Checker {
                 self.args(name, &formals, args, Some(pid), span);
                 Some(self.out.procs[pid].results.clone())
             }
+            SymbolKind::External(pid) if !self.out.procs[pid].results.is_empty() => {
+                let formals = self.formals(pid);
+                self.args(name, &formals, args, Some(pid), span);
+                Some(self.out.procs[pid].results.clone())
+            }
             SymbolKind::Predefined(p) if !p.is_proc() => {
                 self.args(name, &predefined_formals(p), args, None, span);
                 Some(p.results.iter().map(|r| Type::Prim(*r)).collect())
@@ -237,6 +242,10 @@ impl Checker {
         };
         match self.sym(id).kind.clone() {
             SymbolKind::Proc(pid) => {
+                let formals = self.formals(pid);
+                self.args(name, &formals, args, Some(pid), span);
+            }
+            SymbolKind::External(pid) if self.out.procs[pid].results.is_empty() => {
                 let formals = self.formals(pid);
                 self.args(name, &formals, args, Some(pid), span);
             }

@@ -460,7 +460,7 @@ impl Checker {
         info.usage = usage;
     }
 
-    fn param(
+    pub(super) fn param(
         &mut self,
         p: &ast::Param,
         owner: crate::checked::ProcId,
@@ -554,5 +554,6 @@ pub(super) fn kind_name(kind: &SymbolKind) -> &'static str {
         SymbolKind::Protocol(_) => "a PROTOCOL",
         SymbolKind::Predefined(p) if p.is_proc() => "a predefined PROC",
         SymbolKind::Predefined(_) => "a predefined FUNCTION",
+        SymbolKind::External(_) => "an EXTERNAL routine",
     }
 }

@@ -14,6 +14,7 @@
 mod call;
 mod decl;
 mod expr;
+mod external;
 mod io;
 mod place;
 mod process;
@@ -140,6 +141,7 @@ pub(crate) fn run(program: &ast::Program, options: Options) -> (CheckedProgram, 
     c.out.expr_types.reserve(bytes / 10);
     c.out.names.reserve(bytes / 14);
     c.out.constants.reserve(bytes / 40);
+    c.externals(&program.pragmas);
     c.scope.open();
     for decl in &program.decls {
         c.decl(decl);
@@ -178,6 +180,7 @@ impl Checker {
             let set = match pragma.kind {
                 ast::PragmaKind::Shared => &mut c.shared,
                 ast::PragmaKind::PermitAliases => &mut c.permit_aliases,
+                ast::PragmaKind::External => continue,
             };
             set.extend(pragma.names.iter().map(|n| n.text.clone()));
         }

@@ -220,3 +220,13 @@ snapshot!(snapshot_par_usage, "PROC p ()\n  INT x, y:\n  PAR\n    x := 1\n    y 
 snapshot!(snapshot_par_channel, "PROC p (CHAN OF INT c)\n  INT x, y:\n  PAR\n    c ? x\n    c ? y\n:");
 snapshot!(snapshot_constant_overflow, "VAL INT16 x IS 32767(INT16) + 1(INT16):");
 snapshot!(snapshot_needs_rounding, "PROC p (VAL REAL32 r)\n  INT x:\n  x := INT r\n:");
+
+// #PRAGMA EXTERNAL routines.
+accepts!(external_proc_call, "#PRAGMA EXTERNAL \"PROC X.FILL (VAL []REAL32 a, []REAL32 out, RESULT INT n) = 0\"\nPROC p ()\n  [3]REAL32 a, b:\n  INT n:\n  X.FILL (a, b, n)\n:");
+accepts!(external_function_call, "#PRAGMA EXTERNAL \"REAL32 FUNCTION X.F (VAL []REAL32 a) = 0\"\nPROC p ()\n  [3]REAL32 a:\n  REAL32 r:\n  r := X.F (a) + 1.0\n:");
+accepts!(external_declared_in_a_body_is_in_scope_before_it, "PROC q ()\n  X.G (1)\n:\nPROC p ()\n  #PRAGMA EXTERNAL \"PROC X.G (VAL INT a) = 0\"\n  SKIP\n:");
+rejects!(external_argument_type, "#PRAGMA EXTERNAL \"PROC X.G (VAL INT a) = 0\"\nPROC p ()\n  X.G (1.5 (REAL32))\n:", 3, "type");
+rejects!(external_argument_count, "#PRAGMA EXTERNAL \"PROC X.G (VAL INT a) = 0\"\nPROC p ()\n  X.G (1, 2)\n:", 3, "X.G");
+rejects!(external_written_param_needs_a_variable, "#PRAGMA EXTERNAL \"PROC X.H (RESULT INT a) = 0\"\nPROC p ()\n  VAL INT k IS 3:\n  X.H (k)\n:", 4, "k");
+rejects!(external_function_is_not_a_proc, "#PRAGMA EXTERNAL \"INT FUNCTION X.F (VAL INT a) = 0\"\nPROC p ()\n  X.F (1)\n:", 3, "EXTERNAL");
+rejects!(external_writes_count_in_par, "#PRAGMA EXTERNAL \"PROC X.H (RESULT INT a) = 0\"\nPROC p ()\n  INT v:\n  PAR\n    X.H (v)\n    X.H (v)\n:", 6, "v");

@@ -16,6 +16,7 @@ mod test;
 
 use crate::ast::{Name, Pragma, PragmaKind, Span};
 use crate::diagnostic::{Diagnostic, Place, Severity};
+use crate::external::ExternalText;
 use crate::source_map::{LineOrigin, Location, SourceFile, SourceMap};
 use condition::Value;
 use std::collections::HashMap;
@@ -47,8 +48,10 @@ pub struct Preprocessed {
     pub text: String,
     /// The way back to the original files.
     pub map: SourceMap,
-    /// `#PRAGMA SHARED` / `PERMITALIASES` directives, spans in `text`.
+    /// `#PRAGMA SHARED` / `PERMITALIASES` / `EXTERNAL` directives, spans in `text`.
     pub pragmas: Vec<Pragma>,
+    /// The header strings of the `#PRAGMA EXTERNAL` directives, for [`crate::external::parse`].
+    pub externals: Vec<ExternalText>,
     /// Errors and warnings about directives.
     pub diagnostics: Vec<Diagnostic>,
 }
@@ -310,6 +313,7 @@ impl Preprocessor<'_> {
         let kind = match word {
             "SHARED" => PragmaKind::Shared,
             "PERMITALIASES" => PragmaKind::PermitAliases,
+            "EXTERNAL" => return self.external(line, rest),
             _ => {
                 let at = line.whole(&self.out.map);
                 let message = format!("#PRAGMA {word} is ignored");
@@ -324,11 +328,45 @@ impl Preprocessor<'_> {
             }
         };
         let line_out = self.out.text.len() + line.shift;
-        let base = line.text.len() - rest.len();
+        let base = offset_in(line.text, rest);
         let after = rest.find(word).map_or(0, |i| i + word.len());
         let names = pragma_names(&rest[after..], line_out + base + after);
         let span = Span::new(line_out, line_out + line.text.trim_end().len());
-        self.out.pragmas.push(Pragma { kind, names, span });
+        self.out.pragmas.push(Pragma {
+            kind,
+            names,
+            span,
+            external: None,
+        });
+    }
+
+    /// Keeps `#PRAGMA EXTERNAL "header = N"` with the output offset of the header text; the
+    /// header itself is parsed after preprocessing ([`crate::external`]).
+    fn external(&mut self, line: &Line, rest: &str) {
+        let line_out = self.out.text.len() + line.shift;
+        let base = offset_in(line.text, rest);
+        let open = rest.find('"');
+        let close = open.and_then(|o| rest[o + 1..].find('"').map(|c| o + 1 + c));
+        let (Some(open), Some(close)) = (open, close) else {
+            let at = line.whole(&self.out.map);
+            return self.error(
+                at,
+                "the EXTERNAL header must be in double quotes",
+                "write #PRAGMA EXTERNAL \"PROC NAME (VAL INT x) = 0\"",
+            );
+        };
+        let span = Span::new(line_out, line_out + line.text.trim_end().len());
+        self.out.externals.push(ExternalText {
+            pragma: self.out.pragmas.len(),
+            text: rest[open + 1..close].to_string(),
+            at: line_out + base + open + 1,
+        });
+        self.out.pragmas.push(Pragma {
+            kind: PragmaKind::External,
+            names: Vec::new(),
+            span,
+            external: None,
+        });
     }
 
     fn include(&mut self, line: &Line, rest: &str, depth: usize, is_use: bool) {
@@ -365,6 +403,12 @@ impl Preprocessor<'_> {
             Some((path, text)) => self.file(path, text, line.shift + indent, depth + 1),
         }
     }
+}
+
+/// The byte offset of `part`, a slice of `whole`, in `whole` (so a trailing comment stripped
+/// from `part` does not shift it).
+fn offset_in(whole: &str, part: &str) -> usize {
+    (part.as_ptr() as usize).saturating_sub(whole.as_ptr() as usize)
 }
 
 /// The display width of leading white space (tab stops every eight columns).

@@ -191,3 +191,29 @@ fn recursive_include_stops_at_the_depth_limit() {
             .any(|m| m.contains("nested too deeply"))
     );
 }
+
+#[test]
+fn external_pragmas_keep_the_header_text_and_its_offset() {
+    let text = "PROC p ()\n  #PRAGMA EXTERNAL \"PROC X (VAL INT a) = 0\" -- note\n  SKIP\n:\n";
+    let out = preprocess("main.occ", text, &mut HashMap::new());
+    assert!(out.diagnostics.is_empty(), "{:?}", out.diagnostics);
+    assert_eq!(out.pragmas.len(), 1);
+    assert_eq!(out.pragmas[0].kind, PragmaKind::External);
+    let e = &out.externals[0];
+    assert_eq!(e.text, "PROC X (VAL INT a) = 0");
+    assert_eq!(&text[e.at..e.at + e.text.len()], e.text);
+    let bad = preprocess(
+        "m.occ",
+        "#PRAGMA EXTERNAL PROC X () = 0\n",
+        &mut HashMap::new(),
+    );
+    assert!(bad.diagnostics[0].message.contains("double quotes"));
+}
+
+#[test]
+fn shared_pragma_name_spans_survive_a_trailing_comment() {
+    let text = "#PRAGMA SHARED abc -- why\n";
+    let out = preprocess("main.occ", text, &mut HashMap::new());
+    let span = out.pragmas[0].names[0].span;
+    assert_eq!(&text[span.start..span.end], "abc");
+}

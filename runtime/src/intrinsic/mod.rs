@@ -7,11 +7,22 @@
 //! - `VAL REAL32`/`REAL64` pass an `f32`/`f64`;
 //! - an array (`VAL []T` or `[]T`) passes two words, the address of element 0 and the element
 //!   count;
-//! - `RESULT`/`VAR` scalars pass the address of the variable.
+//! - `RESULT`/`VAR` scalars pass the address of a word-sized temporary the intrinsic writes
+//!   (INT and BOOL: a whole `i64` word, BOOL 0 or 1; REAL32: an `f32` at the address); the
+//!   caller copies it to the variable after the call.
+//!
+//! Array elements are stored as occam stores them: INT 4 bytes (`i32`), BOOL and BYTE one byte
+//! (BOOL 0 or 1), REAL32/REAL64 IEEE floats.
 //!
 //! Results come back as `i64`, `f32` or `f64`. Intrinsics never block and never see the node.
 //! The occam side declares them in `stdlib/` (for example `REAL64 FUNCTION DSQRT (VAL REAL64 x)`)
 //! and codegen calls them directly instead of compiling a body.
+//!
+//! Other crates provide their own tables (for example `occ_radiosity::intrinsics::INTRINSICS`):
+//! an occam program declares their routines with `#PRAGMA EXTERNAL "PROC NAME (...) = 0"`, and the
+//! driver hands the code generator an [`IntrinsicSet`] naming every table it may bind. The runtime
+//! itself never depends on those crates: this module states the ABI (the kinds below), the other
+//! crates state their entries.
 
 mod maths;
 mod strings;
@@ -35,8 +46,22 @@ pub enum ParamKind {
     VarBytes,
     /// `VAL []REAL64`: address and length.
     ValReal64s,
-    /// `RESULT INT` or `INT` (written): address.
+    /// `RESULT INT` or `INT` (written): address of a word.
     ResultInt,
+    /// `VAL []INT`: address of `i32` elements and length.
+    ValInts,
+    /// `[]INT` (written): address of `i32` elements and length.
+    VarInts,
+    /// `VAL []REAL32`: address and length.
+    ValReal32s,
+    /// `[]REAL32` (written): address and length.
+    VarReal32s,
+    /// `VAL []BOOL`: address of one-byte elements (0 or 1) and length.
+    ValBools,
+    /// `RESULT REAL32` or `REAL32` (written): address of an `f32`.
+    ResultReal32,
+    /// `RESULT BOOL` or `BOOL` (written): address of a word the intrinsic sets to 0 or 1.
+    ResultBool,
 }
 
 /// The machine type of one argument or result.
@@ -55,12 +80,74 @@ impl ParamKind {
     pub fn machine(self) -> &'static [MachineType] {
         use MachineType::*;
         match self {
-            ParamKind::ValInt | ParamKind::ValByte | ParamKind::ValBool | ParamKind::ResultInt => {
-                &[I64]
-            }
+            ParamKind::ValInt
+            | ParamKind::ValByte
+            | ParamKind::ValBool
+            | ParamKind::ResultInt
+            | ParamKind::ResultReal32
+            | ParamKind::ResultBool => &[I64],
             ParamKind::ValReal32 => &[F32],
             ParamKind::ValReal64 => &[F64],
-            ParamKind::ValBytes | ParamKind::VarBytes | ParamKind::ValReal64s => &[I64, I64],
+            ParamKind::ValBytes
+            | ParamKind::VarBytes
+            | ParamKind::ValReal64s
+            | ParamKind::ValInts
+            | ParamKind::VarInts
+            | ParamKind::ValReal32s
+            | ParamKind::VarReal32s
+            | ParamKind::ValBools => &[I64, I64],
+        }
+    }
+
+    /// Reports whether the intrinsic writes through this parameter (the caller passes a
+    /// variable, not a value).
+    pub fn is_written(self) -> bool {
+        matches!(
+            self,
+            ParamKind::VarBytes
+                | ParamKind::VarInts
+                | ParamKind::VarReal32s
+                | ParamKind::ResultInt
+                | ParamKind::ResultReal32
+                | ParamKind::ResultBool
+        )
+    }
+
+    /// Reports whether this is an array parameter (address and length).
+    pub fn is_array(self) -> bool {
+        self.machine().len() == 2
+    }
+
+    /// The occam spelling of the parameter kind, for diagnostics (`VAL []REAL32`).
+    pub fn occam(self) -> &'static str {
+        match self {
+            ParamKind::ValInt => "VAL INT",
+            ParamKind::ValByte => "VAL BYTE",
+            ParamKind::ValBool => "VAL BOOL",
+            ParamKind::ValReal32 => "VAL REAL32",
+            ParamKind::ValReal64 => "VAL REAL64",
+            ParamKind::ValBytes => "VAL []BYTE",
+            ParamKind::VarBytes => "[]BYTE",
+            ParamKind::ValReal64s => "VAL []REAL64",
+            ParamKind::ResultInt => "RESULT INT",
+            ParamKind::ValInts => "VAL []INT",
+            ParamKind::VarInts => "[]INT",
+            ParamKind::ValReal32s => "VAL []REAL32",
+            ParamKind::VarReal32s => "[]REAL32",
+            ParamKind::ValBools => "VAL []BOOL",
+            ParamKind::ResultReal32 => "RESULT REAL32",
+            ParamKind::ResultBool => "RESULT BOOL",
+        }
+    }
+}
+
+impl MachineType {
+    /// The occam result types this machine type carries, for diagnostics.
+    pub fn occam(self) -> &'static str {
+        match self {
+            MachineType::I64 => "INT, BYTE or BOOL",
+            MachineType::F32 => "REAL32",
+            MachineType::F64 => "REAL64",
         }
     }
 }
@@ -165,9 +252,56 @@ pub static INTRINSICS: &[Intrinsic] = &[
     real_fn!("SUM.REAL64", [ValReal64s], F64, strings::sum_real64),
 ];
 
-/// Finds an intrinsic by occam name.
+/// Finds an intrinsic of the runtime's own table by occam name.
 pub fn intrinsic(name: &str) -> Option<&'static Intrinsic> {
     INTRINSICS.iter().find(|i| i.name == name)
+}
+
+/// The intrinsic tables a program may bind: always the runtime's [`INTRINSICS`], then the tables
+/// added with [`IntrinsicSet::with`], in order. When two tables define the same name the first
+/// one wins.
+#[derive(Clone, Debug)]
+pub struct IntrinsicSet {
+    tables: Vec<&'static [Intrinsic]>,
+}
+
+impl Default for IntrinsicSet {
+    fn default() -> Self {
+        IntrinsicSet {
+            tables: vec![INTRINSICS],
+        }
+    }
+}
+
+impl IntrinsicSet {
+    /// The runtime's own table only.
+    pub fn new() -> Self {
+        IntrinsicSet::default()
+    }
+
+    /// Adds another crate's table (a table already in the set is not added twice).
+    pub fn with(mut self, table: &'static [Intrinsic]) -> Self {
+        if !self.tables.iter().any(|t| std::ptr::eq(*t, table)) {
+            self.tables.push(table);
+        }
+        self
+    }
+
+    /// Finds an intrinsic by occam name in the first table that has it.
+    pub fn find(&self, name: &str) -> Option<&'static Intrinsic> {
+        self.tables
+            .iter()
+            .find_map(|t| t.iter().find(|i| i.name == name))
+    }
+
+    /// Every intrinsic of the set, each name once (the first table's entry).
+    pub fn iter(&self) -> impl Iterator<Item = &'static Intrinsic> + '_ {
+        let mut seen = std::collections::HashSet::new();
+        self.tables
+            .iter()
+            .flat_map(|t| t.iter())
+            .filter(move |i| seen.insert(i.name))
+    }
 }
 
 #[cfg(test)]
@@ -210,6 +344,22 @@ mod test {
         let xs = [1.0, 2.5, 3.5];
         // SAFETY: valid slice.
         assert_eq!(unsafe { g(xs.as_ptr(), 3) }, 7.0);
+    }
+
+    #[test]
+    fn a_set_binds_extra_tables_and_the_first_name_wins() {
+        static EXTRA: &[Intrinsic] = &[
+            real_fn!("SQRT", [ValReal64], F64, maths::sqrt64),
+            real_fn!("EXTRA.SQRT", [ValReal64], F64, maths::sqrt64),
+        ];
+        let set = IntrinsicSet::new().with(EXTRA).with(EXTRA);
+        assert_eq!(set.find("SQRT").map(|i| i.params), Some(&[ValReal32][..]));
+        assert!(set.find("EXTRA.SQRT").is_some());
+        assert!(set.find("NOT.THERE").is_none());
+        assert_eq!(set.iter().count(), INTRINSICS.len() + 1);
+        assert!(ParamKind::VarReal32s.is_written() && ParamKind::VarReal32s.is_array());
+        assert!(!ParamKind::ValBools.is_written() && ParamKind::ValBools.is_array());
+        assert_eq!(ParamKind::ResultReal32.machine(), &[MachineType::I64]);
     }
 
     #[test]

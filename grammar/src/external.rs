@@ -1,0 +1,173 @@
+//! `#PRAGMA EXTERNAL "header = N"`: the routine header inside the string, parsed with the
+//! ordinary grammar.
+//!
+//! Contract:
+//! - The header is a PROC header (`PROC NAME (formals)`) or a FUNCTION header
+//!   (`REAL32, INT FUNCTION NAME (formals)`), followed by `= N` where `N` is a decimal number
+//!   (KRoC's workspace size, kept and otherwise ignored).
+//! - Every span in the result (names, types, parameters) and in every diagnostic is an offset into
+//!   the preprocessed text at the place of the string, so reports point into the pragma line.
+//! - A malformed header gives diagnostics, never a panic.
+
+use crate::ast::{DeclKind, External, Span};
+use crate::diagnostic::{Diagnostic, Place};
+
+/// The text of one `#PRAGMA EXTERNAL` string, as the preprocessor found it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ExternalText {
+    /// Index of the pragma in `Preprocessed::pragmas`.
+    pub pragma: usize,
+    /// The text between the quotes.
+    pub text: String,
+    /// Offset of the text's first byte in the preprocessed text.
+    pub at: usize,
+}
+
+/// Parses the header `e` into an [`External`], or returns the diagnostics that say why not.
+pub fn parse(e: &ExternalText) -> Result<External, Vec<Diagnostic>> {
+    let whole = Span::new(e.at, e.at + e.text.len());
+    let (head, workspace) = split_workspace(&e.text, e.at)?;
+    let is_function = head.split_whitespace().any(|w| w == "FUNCTION");
+    let body = if is_function {
+        " IS 0:\n"
+    } else {
+        "\n  SKIP\n:\n"
+    };
+    // Newlines up to the string's offset keep every span of the parse equal to the offset in the
+    // preprocessed text, and put the header at column 0 of its own line.
+    let mut padded = "\n".repeat(e.at);
+    padded.push_str(head);
+    padded.push_str(body);
+    let parse = crate::parser::parse(&padded);
+    let errors: Vec<Diagnostic> = parse
+        .diagnostics
+        .into_iter()
+        .filter(|d| d.severity == crate::diagnostic::Severity::Error)
+        .map(|d| clamp(d, whole))
+        .collect();
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    let mut decls = parse.program.decls.into_iter();
+    let (decl, extra) = (decls.next(), decls.next());
+    let external = |name, results, params| External {
+        name,
+        results,
+        params,
+        workspace,
+        header: whole,
+    };
+    match (decl.map(|d| d.kind), extra) {
+        (Some(DeclKind::Proc { name, params, .. }), None) => Ok(external(name, Vec::new(), params)),
+        (
+            Some(DeclKind::Function {
+                name,
+                results,
+                params,
+                ..
+            }),
+            None,
+        ) => Ok(external(name, results, params)),
+        _ => Err(vec![not_a_header(whole)]),
+    }
+}
+
+/// Splits `header = N` into the header and `N`.
+fn split_workspace(text: &str, at: usize) -> Result<(&str, i64), Vec<Diagnostic>> {
+    let whole = Span::new(at, at + text.len());
+    let Some(eq) = text.rfind('=') else {
+        let d = Diagnostic::error(
+            whole,
+            "an EXTERNAL header must end with `= N` (the workspace size)",
+            "no `=` in this header",
+        )
+        .with_help("write #PRAGMA EXTERNAL \"PROC NAME (VAL INT x) = 0\"");
+        return Err(vec![d]);
+    };
+    let number = text[eq + 1..].trim();
+    let Ok(workspace) = number.parse::<i64>() else {
+        let span = Span::new(at + eq, at + text.len());
+        let message = format!("`{number}` is not a workspace size (a decimal number)");
+        return Err(vec![Diagnostic::error(span, message, "after this `=`")]);
+    };
+    let head = text[..eq].trim_end();
+    if head.trim().is_empty() {
+        return Err(vec![not_a_header(whole)]);
+    }
+    Ok((head, workspace))
+}
+
+fn not_a_header(span: Span) -> Diagnostic {
+    Diagnostic::error(
+        span,
+        "an EXTERNAL pragma must hold one PROC or FUNCTION header",
+        "this is not a PROC or FUNCTION header",
+    )
+    .with_help("write #PRAGMA EXTERNAL \"PROC NAME (VAL INT x) = 0\"")
+}
+
+/// Keeps a diagnostic of the header's parse inside the header (the parse also saw the body
+/// the header was completed with).
+fn clamp(mut d: Diagnostic, whole: Span) -> Diagnostic {
+    if let Place::Output(span) = &mut d.place {
+        let start = span.start.clamp(whole.start, whole.end.saturating_sub(1));
+        let end = span.end.clamp(start + 1, whole.end.max(start + 1));
+        *span = Span::new(start, end);
+    }
+    d
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+    use crate::ast::ParamMode;
+
+    fn text(t: &str, at: usize) -> ExternalText {
+        ExternalText {
+            pragma: 0,
+            text: t.to_string(),
+            at,
+        }
+    }
+
+    #[test]
+    fn a_proc_header_keeps_its_spans() {
+        let t = "PROC RAD.X (VAL []REAL32 p, n, RESULT REAL32 f) = 0";
+        let e = parse(&text(t, 40)).expect("parses");
+        assert_eq!(e.name.text, "RAD.X");
+        assert_eq!(e.name.span, Span::new(45, 50));
+        assert!(e.results.is_empty());
+        assert_eq!(e.params.len(), 3);
+        assert_eq!(e.params[1].name.text, "n");
+        assert_eq!(e.params[2].mode, ParamMode::Result);
+        assert_eq!(e.header, Span::new(40, 40 + t.len()));
+    }
+
+    #[test]
+    fn a_function_header_may_have_several_results() {
+        let e = parse(&text("REAL32, INT FUNCTION F.G (VAL INT x) = 120", 3)).expect("parses");
+        assert_eq!(e.name.text, "F.G");
+        assert_eq!(e.results.len(), 2);
+        assert_eq!(e.workspace, 120);
+    }
+
+    #[test]
+    fn malformed_headers_are_diagnostics_inside_the_string() {
+        for (t, needle) in [
+            ("PROC X (VAL INT x)", "must end with `= N`"),
+            ("PROC X (VAL INT x) = lots", "not a workspace size"),
+            ("PROC X (VAL INT x = 0", ""),
+            (" = 0", "one PROC or FUNCTION header"),
+            ("INT x: = 0", ""),
+            ("PROC (VAL INT x) = 0", ""),
+        ] {
+            let errors = parse(&text(t, 10)).expect_err(t);
+            assert!(!errors.is_empty());
+            assert!(errors[0].message.contains(needle), "{t}: {errors:?}");
+            for d in errors {
+                let Place::Output(s) = d.place else { panic!() };
+                assert!(s.start >= 10 && s.end <= 10 + t.len().max(1), "{t}: {s:?}");
+            }
+        }
+    }
+}
