@@ -22,7 +22,7 @@
 //! - a node's integer box is `origin .. origin + (1 << (depth - level))` on each axis;
 //! - children of node `n` are `nodes[n.first .. n.first + 8]`, ordered by `x | y << 1 | z << 2`.
 
-use glam::{BVec3, UVec3, Vec3};
+use glam::{BVec3A, UVec3, Vec3, Vec3A};
 
 use crate::geom::{Tri, ray_triangle};
 use crate::packet::{BoxGroup, LANES, NO_TRIANGLE, RayQuery, TriPacket};
@@ -443,29 +443,38 @@ const ROPES: u8 = 1;
 const GLASSNER: u8 = 2;
 
 /// One ray's walk through the leaves, in cell units (the finest grid), where a leaf's faces are
-/// integers: `c(t) = oc + dc t`.
+/// integers: `c(t) = oc + dc t`. Cells are held as integer-valued `f32`s in SIMD vectors (exact
+/// below 2^24; the grid has at most 2^20 cells a side), so a step is a handful of vector
+/// instructions; integers appear only for the descent.
 ///
 /// The walk keeps `path[l]`, the node at level `l` on the way from the root to the current leaf
 /// (outside the walker, so that it is not copied), so that Samet's climb to the common ancestor
-/// is a look-up in `path` rather than a chain of parent links through memory. Each step is branch-free but for the descent: the exit face is chosen
-/// by a mask.
+/// is a look-up in `path` rather than a chain of parent links through memory.
 #[derive(Clone, Copy)]
 struct Walker {
-    oc: Vec3,
-    dc: Vec3,
-    inv_c: Vec3,
-    forward: BVec3,
-    moving: BVec3,
+    oc: Vec3A,
+    dc: Vec3A,
+    inv_c: Vec3A,
+    /// 1 on the axes along which the ray moves forward, 0 elsewhere.
+    forward01: Vec3A,
+    forward: BVec3A,
+    moving: BVec3A,
+    /// Cells a side of the grid.
+    cells: f32,
     tmax: f32,
     level: u32,
-    origin: UVec3,
     /// The current leaf's node index.
     node: u32,
+    /// The current leaf's low corner and size, in cells.
+    origin: Vec3A,
+    size: f32,
     /// The current leaf's `[first packet, packet count]`.
     leaf: [u32; 2],
     /// Where the ray leaves the current leaf.
     t_exit: f32,
-    /// The axis of the face it leaves through.
+    /// The axis of the face it leaves through: the first axis whose face the ray reaches at
+    /// `t_exit` (an exit through an edge or corner steps across one face; the next step leaves
+    /// at once across the other).
     axis: usize,
 }
 
@@ -485,53 +494,56 @@ impl Walker {
     ) -> Option<Walker> {
         let inv = Vec3::ONE / d;
         let t0 = tree.enter(o, inv, tmin, tmax)?;
+        let d = Vec3A::from(d);
+        let forward = d.cmpgt(Vec3A::ZERO);
         let mut w = Walker {
-            oc: (o - tree.lo) / tree.cell,
+            oc: ((o - tree.lo) / tree.cell).into(),
             dc: d / tree.cell,
-            inv_c: inv * tree.cell,
-            forward: d.cmpgt(Vec3::ZERO),
-            moving: d.cmpne(Vec3::ZERO),
+            inv_c: Vec3A::from(inv) * tree.cell,
+            forward01: Vec3A::select(forward, Vec3A::ONE, Vec3A::ZERO),
+            forward,
+            moving: d.cmpne(Vec3A::ZERO),
+            cells: (1u32 << tree.depth) as f32,
             tmax,
             level: 0,
-            origin: UVec3::ZERO,
             node: 0,
+            origin: Vec3A::ZERO,
+            size: 0.0,
             leaf: [0, 0],
             t_exit: 0.0,
             axis: 0,
         };
-        let q = w.cell_at(t0).min(UVec3::splat((1u32 << tree.depth) - 1));
+        let q = w.cell_at(t0).min(Vec3A::splat(w.cells - 1.0));
         w.enter(tree, path, 0, 0, q);
         Some(w)
     }
 
     /// The cell holding the ray's point at `t` (truncation is floor: clamped non-negative).
     #[inline(always)]
-    fn cell_at(&self, t: f32) -> UVec3 {
-        (self.oc + self.dc * t).max(Vec3::ZERO).as_uvec3()
+    fn cell_at(&self, t: f32) -> Vec3A {
+        trunc((self.oc + self.dc * t).max(Vec3A::ZERO))
     }
 
     /// Descends from node `n` at `level` to the leaf holding cell `q` and computes where the
     /// ray leaves it.
     #[inline(always)]
-    fn enter(&mut self, tree: &Octree, path: &mut Path, level: u32, n: u32, q: UVec3) {
-        (self.level, self.node) = tree.descend(path, level, n, q);
-        let size = 1u32 << (tree.depth - self.level);
-        self.origin = q & UVec3::splat(!(size - 1));
+    fn enter(&mut self, tree: &Octree, path: &mut Path, level: u32, n: u32, q: Vec3A) {
+        (self.level, self.node) = tree.descend(path, level, n, q.as_uvec3());
+        self.size = (1u32 << (tree.depth - self.level)) as f32;
+        // Exact: the size is a power of two.
+        self.origin = trunc(q * (1.0 / self.size)) * self.size;
         self.leaf = tree.hot[self.node as usize];
-        let far = Vec3::select(
-            self.forward,
-            (self.origin + size).as_vec3(),
-            self.origin.as_vec3(),
-        );
-        let t = Vec3::select(
+        let far = self.origin + self.forward01 * self.size;
+        let t = Vec3A::select(
             self.moving,
-            ((far - self.oc) * self.inv_c).max(Vec3::ZERO),
-            Vec3::INFINITY,
+            ((far - self.oc) * self.inv_c).max(Vec3A::ZERO),
+            Vec3A::INFINITY,
         );
         self.t_exit = t.min_element();
-        // The first axis whose face the ray reaches at t_exit (an exit through an edge or
-        // corner steps across one face; the next step leaves at once across the other).
-        self.axis = t.cmpeq(Vec3::splat(self.t_exit)).bitmask().trailing_zeros() as usize;
+        self.axis = t
+            .cmpeq(Vec3A::splat(self.t_exit))
+            .bitmask()
+            .trailing_zeros() as usize;
     }
 
     /// Visits the leaves from here on; `visit([first packet, packet count], t_exit)` returns
@@ -553,28 +565,28 @@ impl Walker {
         if self.t_exit >= self.tmax {
             return false;
         }
-        let size = 1u32 << (tree.depth - self.level);
         let axis = self.axis;
-        let exits = BVec3::new(axis == 0, axis == 1, axis == 2);
-        let across = UVec3::select(
+        // The cell just beyond the exit face, clamped to the leaf on the other axes so that
+        // it is always a face neighbour; past the root box it ends.
+        let across = Vec3A::select(
             self.forward,
-            self.origin + size,
-            self.origin.wrapping_sub(UVec3::ONE),
+            self.origin + self.size,
+            self.origin - Vec3A::ONE,
         );
         let inside = self
             .cell_at(self.t_exit)
-            .clamp(self.origin, self.origin + (size - 1));
-        let next = UVec3::select(exits, across, inside);
-        if next.cmpge(UVec3::splat(1u32 << tree.depth)).any() {
+            .clamp(self.origin, self.origin + (self.size - 1.0));
+        let next = Vec3A::select(EXIT[axis], across, inside);
+        if (next.cmplt(Vec3A::ZERO) | next.cmpge(Vec3A::splat(self.cells))).any() {
             return false;
         }
         let (level, n) = match MODE {
             SAMET => {
-                let level = tree.common_level(self.level, self.origin, next);
+                let level = tree.common_level(self.level, self.origin.as_uvec3(), next.as_uvec3());
                 (level, path[level as usize])
             }
             ROPES => {
-                let face = 2 * axis + self.forward.test(axis) as usize;
+                let face = 2 * axis + ((self.forward.bitmask() >> axis) & 1) as usize;
                 let rope = tree.ropes[6 * self.node as usize + face];
                 (rope & 31, rope >> 5)
             }
@@ -582,6 +594,29 @@ impl Walker {
         };
         self.enter(tree, path, level, n, next);
         true
+    }
+}
+
+/// Masks selecting one axis.
+const EXIT: [BVec3A; 3] = [
+    BVec3A::new(true, false, false),
+    BVec3A::new(false, true, false),
+    BVec3A::new(false, false, true),
+];
+
+/// Truncates non-negative integer-valued-or-not coordinates below 2^31 (two instructions on
+/// x86-64, where glam's general `trunc` takes many).
+#[inline(always)]
+fn trunc(v: Vec3A) -> Vec3A {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvtepi32_ps, _mm_cvttps_epi32};
+        // SAFETY: SSE2 is part of the x86-64 baseline.
+        unsafe { Vec3A::from(_mm_cvtepi32_ps(_mm_cvttps_epi32(v.into()))) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        v.trunc()
     }
 }
 

@@ -47,6 +47,7 @@ pub struct RayQuery {
     /// Axes along which the ray does not move (`1 / d` infinite): there a box is met when the
     /// origin lies within its slab, whatever `t`, and the slab product would give NaN on a face.
     parallel: [bool; 3],
+    any_parallel: bool,
     tmin: f32,
     tmax: f32,
 }
@@ -61,6 +62,7 @@ impl RayQuery {
             d: d.to_array().map(Vec4::splat),
             inv: inv.map(|i| Vec4::splat(if i.is_finite() { i } else { 0.0 })),
             parallel: inv.map(|i| !i.is_finite()),
+            any_parallel: inv.iter().any(|i| !i.is_finite()),
             tmin,
             tmax,
         }
@@ -147,10 +149,8 @@ impl TriPacket {
 #[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BoxGroup {
-    /// x, y and z of the low corners.
-    pub lo: [Vec4; 3],
-    /// x, y and z of the high corners.
-    pub hi: [Vec4; 3],
+    /// x, y and z of the low corners (`sides[0]`) and of the high corners (`sides[1]`).
+    pub sides: [[Vec4; 3]; 2],
 }
 
 impl BoxGroup {
@@ -161,29 +161,49 @@ impl BoxGroup {
     /// [`BoxGroup::hits`] is exact for flat boxes (`lo == hi` on an axis) and for rays parallel
     /// to a face, including rays lying in the face.
     pub const EMPTY: BoxGroup = BoxGroup {
-        lo: [Vec4::splat(1e30); 3],
-        hi: [Vec4::splat(1e30); 3],
+        sides: [[Vec4::splat(1e30); 3]; 2],
     };
 
     /// Sets box `lane` to `lo..hi` widened by `margin` on every side.
     pub fn set_lane(&mut self, lane: usize, lo: Vec3, hi: Vec3, margin: f32) {
         for axis in 0..3 {
-            self.lo[axis][lane] = lo[axis] - margin;
-            self.hi[axis][lane] = hi[axis] + margin;
+            self.sides[0][axis][lane] = lo[axis] - margin;
+            self.sides[1][axis][lane] = hi[axis] + margin;
         }
     }
 
     /// Returns the boxes the ray's segment `tmin < t < tmax` may meet, as a bit mask (slab test).
     #[inline(always)]
     pub fn hits(&self, r: &RayQuery) -> u32 {
+        if r.any_parallel {
+            return self.hits_parallel(r);
+        }
+        let [lo, hi] = &self.sides;
+        let slab = |axis: usize| {
+            let t1 = (lo[axis] - r.o[axis]) * r.inv[axis];
+            let t2 = (hi[axis] - r.o[axis]) * r.inv[axis];
+            (t1.min(t2), t1.max(t2))
+        };
+        let (nx, fx) = slab(0);
+        let (ny, fy) = slab(1);
+        let (nz, fz) = slab(2);
+        let near = nx.max(ny).max(nz).max(Vec4::splat(r.tmin));
+        let far = fx.min(fy).min(fz).min(Vec4::splat(r.tmax));
+        near.cmple(far).bitmask()
+    }
+
+    /// [`BoxGroup::hits`] for a ray that does not move along some axis.
+    #[cold]
+    fn hits_parallel(&self, r: &RayQuery) -> u32 {
+        let [lo, hi] = &self.sides;
         let slab = |axis: usize| {
             if r.parallel[axis] {
-                let inside = self.lo[axis].cmple(r.o[axis]) & r.o[axis].cmple(self.hi[axis]);
+                let inside = lo[axis].cmple(r.o[axis]) & r.o[axis].cmple(hi[axis]);
                 let open = Vec4::select(inside, Vec4::NEG_INFINITY, Vec4::INFINITY);
                 return (open, -open);
             }
-            let t1 = (self.lo[axis] - r.o[axis]) * r.inv[axis];
-            let t2 = (self.hi[axis] - r.o[axis]) * r.inv[axis];
+            let t1 = (lo[axis] - r.o[axis]) * r.inv[axis];
+            let t2 = (hi[axis] - r.o[axis]) * r.inv[axis];
             (t1.min(t2), t1.max(t2))
         };
         let (nx, fx) = slab(0);
