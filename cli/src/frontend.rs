@@ -6,6 +6,10 @@
 //! - `Diag::line` is the 1-based line in `Diag::file` (the file the problem is in, which may be an
 //!   included file), after mapping back through `#INCLUDE` re-indentation.
 //!
+//! - A program that checks clean is also linked: every `#PRAGMA EXTERNAL` routine it calls must
+//!   be in [`intrinsics`] with the signature its pragma gives (`occ_codegen::link`), so these
+//!   errors come out of `occ check` and `occ test` with lines like the checker's.
+//!
 //! Include search order: the including file's folder, then the `-I` folders, then `stdlib/`
 //! (from `OCC_STDLIB`, else the `stdlib/` folder of the workspace the executable was built in or
 //! sits in).
@@ -114,6 +118,15 @@ pub fn load(path: &Path, options: &Options) -> (Option<Front>, Checked) {
                 d.kind.help(),
             )
         }));
+        if let Some(c) = &checked {
+            let bindings = occ_codegen::link::bind_externals(c, &intrinsics());
+            diagnostics.extend(
+                bindings
+                    .errors
+                    .into_iter()
+                    .map(|e| located(&parsed, Severity::Error, e.span, e.message, e.label, None)),
+            );
+        }
         checked_program = checked;
     }
 
@@ -127,6 +140,12 @@ pub fn load(path: &Path, options: &Options) -> (Option<Front>, Checked) {
         _ => None,
     };
     (front, checked)
+}
+
+/// The native intrinsics occ links programs against: the runtime's own and the radiosity
+/// kernels (`#INCLUDE "radiosity.inc"` declares them).
+pub fn intrinsics() -> occ_codegen::IntrinsicSet {
+    occ_codegen::IntrinsicSet::new().with(occ_radiosity::intrinsics::INTRINSICS)
 }
 
 /// Builds a `Diag` for a problem at `span` of the preprocessed text of `parsed`.

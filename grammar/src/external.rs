@@ -23,11 +23,17 @@ pub struct ExternalText {
     pub at: usize,
 }
 
+/// The advice given with every malformed header.
+const HELP: &str = "write #PRAGMA EXTERNAL \"PROC NAME (VAL INT x) = 0\" or \"REAL32 FUNCTION NAME (VAL INT x) = 0\"";
+
 /// Parses the header `e` into an [`External`], or returns the diagnostics that say why not.
 pub fn parse(e: &ExternalText) -> Result<External, Vec<Diagnostic>> {
     let whole = Span::new(e.at, e.at + e.text.len());
     let (head, workspace) = split_workspace(&e.text, e.at)?;
     let is_function = head.split_whitespace().any(|w| w == "FUNCTION");
+    if !is_function && !head.split_whitespace().any(|w| w == "PROC") {
+        return Err(vec![not_a_header(whole)]);
+    }
     let body = if is_function {
         " IS 0:\n"
     } else {
@@ -39,14 +45,18 @@ pub fn parse(e: &ExternalText) -> Result<External, Vec<Diagnostic>> {
     padded.push_str(head);
     padded.push_str(body);
     let parse = crate::parser::parse(&padded);
-    let errors: Vec<Diagnostic> = parse
+    // The first error only: the rest are usually cascades through the completed body.
+    let first = parse
         .diagnostics
         .into_iter()
-        .filter(|d| d.severity == crate::diagnostic::Severity::Error)
-        .map(|d| clamp(d, whole))
-        .collect();
-    if !errors.is_empty() {
-        return Err(errors);
+        .find(|d| d.severity == crate::diagnostic::Severity::Error);
+    if let Some(d) = first {
+        let d = clamp(d, whole);
+        let d = match d.help {
+            Some(_) => d,
+            None => d.with_help(HELP),
+        };
+        return Err(vec![d]);
     }
     let mut decls = parse.program.decls.into_iter();
     let (decl, extra) = (decls.next(), decls.next());
@@ -81,7 +91,7 @@ fn split_workspace(text: &str, at: usize) -> Result<(&str, i64), Vec<Diagnostic>
             "an EXTERNAL header must end with `= N` (the workspace size)",
             "no `=` in this header",
         )
-        .with_help("write #PRAGMA EXTERNAL \"PROC NAME (VAL INT x) = 0\"");
+        .with_help(HELP);
         return Err(vec![d]);
     };
     let number = text[eq + 1..].trim();
@@ -94,6 +104,15 @@ fn split_workspace(text: &str, at: usize) -> Result<(&str, i64), Vec<Diagnostic>
     if head.trim().is_empty() {
         return Err(vec![not_a_header(whole)]);
     }
+    if head.matches('(').count() != head.matches(')').count() {
+        let d = Diagnostic::error(
+            Span::new(at, at + head.len()),
+            "the parentheses of this EXTERNAL header do not match",
+            "a formal list is `(` ... `)`",
+        )
+        .with_help(HELP);
+        return Err(vec![d]);
+    }
     Ok((head, workspace))
 }
 
@@ -103,7 +122,7 @@ fn not_a_header(span: Span) -> Diagnostic {
         "an EXTERNAL pragma must hold one PROC or FUNCTION header",
         "this is not a PROC or FUNCTION header",
     )
-    .with_help("write #PRAGMA EXTERNAL \"PROC NAME (VAL INT x) = 0\"")
+    .with_help(HELP)
 }
 
 /// Keeps a diagnostic of the header's parse inside the header (the parse also saw the body
@@ -156,9 +175,11 @@ mod test {
         for (t, needle) in [
             ("PROC X (VAL INT x)", "must end with `= N`"),
             ("PROC X (VAL INT x) = lots", "not a workspace size"),
-            ("PROC X (VAL INT x = 0", ""),
+            ("PROC X (VAL INT x = 0", "parentheses"),
             (" = 0", "one PROC or FUNCTION header"),
-            ("INT x: = 0", ""),
+            ("INT x: = 0", "one PROC or FUNCTION header"),
+            ("X (VAL INT x) = 0", "one PROC or FUNCTION header"),
+            ("PROC X (VAL INT x) PROC Y () = 0", ""),
             ("PROC (VAL INT x) = 0", ""),
         ] {
             let errors = parse(&text(t, 10)).expect_err(t);

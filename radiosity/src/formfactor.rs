@@ -103,6 +103,23 @@ pub fn form_factor(
     samples: &[Vec3],
     config: &FormFactorConfig,
 ) -> FormFactor {
+    form_factor_with(p, n, src, samples, config, |_, origin, d, tmax| {
+        octree.is_some_and(|o| o.occluded(origin, d, 0.0, tmax, Traversal::Samet))
+    })
+}
+
+/// [`form_factor`] with the shadow rays answered by `occluded(k, origin, dir, tmax)`: whether
+/// the ray from `origin` along `dir` (parameter 0 to `tmax`) towards sample `k` is blocked. It is
+/// asked only for the samples above the receiver's horizon and in front of the source, in order.
+/// (The `RAD.FORM.FACTOR` intrinsic answers from a visibility array computed elsewhere.)
+pub fn form_factor_with(
+    p: Vec3,
+    n: Vec3,
+    src: &Tri,
+    samples: &[Vec3],
+    config: &FormFactorConfig,
+    mut occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
+) -> FormFactor {
     let ns = src.normal();
     let area = src.area();
     // Receiver behind the (one-sided) source, or source wholly below the receiver's horizon.
@@ -114,7 +131,7 @@ pub fn form_factor(
     let analytic = sub_area > config.max_disc_bias * std::f32::consts::PI * d_min2;
     let origin = p + n * config.offset;
     let (mut wallace, mut above, mut visible, mut rays) = (0.0f32, 0u32, 0u32, 0u32);
-    for &x in samples {
+    for (k, &x) in samples.iter().enumerate() {
         let r = x - p;
         let len2 = r.length_squared();
         let len = len2.sqrt();
@@ -127,7 +144,7 @@ pub fn form_factor(
         let d = x - origin;
         let tmax = 1.0 - config.offset / d.length().max(config.offset * 2.0);
         rays += 1;
-        if octree.is_some_and(|o| o.occluded(origin, d, 0.0, tmax, Traversal::Samet)) {
+        if occluded(k, origin, d, tmax) {
             continue;
         }
         visible += 1;

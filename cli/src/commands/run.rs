@@ -35,14 +35,15 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     let Some(front) = front else {
         return Ok(ExitCode::from(1));
     };
-    let compiled =
-        match occ_codegen::compile(&front.parsed.program, &front.checked, &front.parsed.map) {
-            Ok(compiled) => compiled,
-            Err(error) => {
-                eprintln!("{}: {error}", args.file.display());
-                return Ok(ExitCode::from(1));
-            }
-        };
+    let (program, map) = (&front.parsed.program, &front.parsed.map);
+    let set = frontend::intrinsics();
+    let compiled = match occ_codegen::compile_with(program, &front.checked, map, &set) {
+        Ok(compiled) => compiled,
+        Err(error) => {
+            eprintln!("{}: {error}", args.file.display());
+            return Ok(ExitCode::from(1));
+        }
+    };
     let (result, stats) = compiled.run(NodeConfig::default(), HostIo::stdio());
     if args.stats {
         eprintln!("{stats}");
