@@ -172,3 +172,56 @@ fn a_signature_that_disagrees_with_the_table_is_an_error_at_the_pragma() {
         assert!(e.contains("test.occ:1:") && e.contains(why), "{decl}: {e}");
     }
 }
+
+/// `PROC T.BUMP (INT n, REAL32 r, BOOL b)`: reference scalars are in/out.
+unsafe extern "C" fn bump(n: *mut Word, r: *mut f32, b: *mut Word) {
+    // SAFETY: the ABI passes valid result words.
+    unsafe {
+        *n += 1;
+        *r *= 2.0;
+        *b = 1 - *b;
+    }
+}
+
+static BUMP: &[Intrinsic] = &[Intrinsic {
+    name: "T.BUMP",
+    params: &[ResultInt, ResultReal32, ResultBool],
+    result: None,
+    addr: bump as *const u8,
+}];
+
+#[test]
+fn reference_scalars_are_read_and_written() {
+    let src = "#INCLUDE \"course.module\"
+#PRAGMA EXTERNAL \"PROC T.BUMP (INT n, REAL32 r, BOOL b) = 0\"
+PROC main (CHAN BYTE keyboard?, screen!, error!)
+  INT n:
+  REAL32 r:
+  BOOL b:
+  SEQ
+    n, r, b := -5, 1.5, TRUE
+    T.BUMP (n, r, b)
+    out.int (n, 0, screen!)
+    out.string (\" \", 0, screen!)
+    out.int (INT ROUND r, 0, screen!)
+    out.string (\" \", 0, screen!)
+    out.bool (b, 0, screen!)
+:
+";
+    let parsed = occ_grammar::parse_source("test.occ", src, &mut common::StdlibLoader);
+    let (checked, _) = occ_compiler::check(&parsed.program);
+    let checked = checked.expect("checks");
+    let set = IntrinsicSet::new().with(BUMP);
+    let c = occ_codegen::compile_with(&parsed.program, &checked, &parsed.map, &set)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let out = Buf::default();
+    let host = HostIo::new(
+        Box::new(std::io::empty()),
+        Box::new(out.clone()),
+        Box::new(std::io::sink()),
+    );
+    let (r, _) = c.run(NodeConfig::default(), host);
+    r.unwrap_or_else(|e| panic!("{e}"));
+    let text = String::from_utf8_lossy(&out.0.lock().expect("buffer")).into_owned();
+    assert_eq!(text, "-4 3 FALSE");
+}

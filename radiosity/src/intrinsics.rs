@@ -5,11 +5,14 @@
 //! The occam declarations are in `stdlib/radiosity.inc` (`#INCLUDE "radiosity.inc"`), one
 //! `#PRAGMA EXTERNAL` each; the code generator checks them against this table when it binds a
 //! call. Every wrapper runs on the data the calling node holds and nothing else: no octree, no
-//! scene, no global state, so a node can run them on its own share of the patches.
+//! scene, no global state, so a node can run them on its own share of the patches. A form factor
+//! with occlusion takes three steps, so that the shadow rays can be answered by whichever node
+//! holds the geometry: `RAD.SOURCE.SAMPLES`, then `RAD.SHADOW.RAYS` (the rays to answer), then
+//! `RAD.FORM.FACTOR` with the answers.
 //!
 //! Contract on bad input: an intrinsic cannot halt the node, so none of them panics. A wrong
 //! array length makes a form-factor kernel answer `-1.0` (a form factor is never negative) and
-//! the sample kernel answer a count of `-1`, writing nothing to its output array. Lengths are
+//! the sample and ray kernels answer a count of `-1`, writing nothing to their output arrays. Lengths are
 //! checked before anything is read. Points, normals and triangles are flat `[]REAL32` arrays:
 //! `x, y, z` per point, three points per triangle.
 
@@ -54,7 +57,19 @@ pub static INTRINSICS: &[Intrinsic] = &[
         result: None,
         addr: form_factor_visible as *const u8,
     },
+    Intrinsic {
+        name: "RAD.SHADOW.RAYS",
+        params: &[
+            ValReal32s, ValReal32s, ValReal32s, ValReal32s, VarReal32s, ResultInt,
+        ],
+        result: None,
+        addr: shadow_rays as *const u8,
+    },
 ];
+
+/// Floats per ray written by `RAD.SHADOW.RAYS`: origin (3), direction (3), tmin, tmax (the
+/// layout of [`crate::kernels::Ray`]).
+pub const RAY_FLOATS: usize = 8;
 
 /// Views an occam array passed by address and length (empty when the length is not positive
 /// or the address is null).
@@ -206,6 +221,70 @@ pub unsafe extern "C" fn form_factor_visible(
     unsafe { *f = value };
 }
 
+/// `PROC RAD.SHADOW.RAYS (VAL []REAL32 point, normal, VAL []REAL32 tri, VAL []REAL32 samples,
+/// []REAL32 rays, RESULT INT count)`: the shadow rays `RAD.FORM.FACTOR` needs answered for the
+/// receiver (`point`, unit `normal`), the source triangle `tri` and its samples (3m floats): for
+/// sample k, floats `8k .. 8k+7` of `rays` get origin (3), direction (3), tmin, tmax, the ray the
+/// Rust solver would cast (one implementation: [`form_factor_with`] asks for exactly these). A
+/// sample that needs no ray (below the receiver's horizon, or the receiver behind the source)
+/// gets an empty ray (direction 0, tmin = tmax = 0), whose flag `RAD.FORM.FACTOR` ignores.
+/// `count` is the number of rays to cast, or -1 (and `rays` untouched) when `point`, `normal`
+/// or `tri` has the wrong length, `samples` is not 3m floats with m >= 1, or `rays` is shorter
+/// than 8m floats.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+pub unsafe extern "C" fn shadow_rays(
+    p: *const f32,
+    p_len: Word,
+    n: *const f32,
+    n_len: Word,
+    tri: *const f32,
+    tri_len: Word,
+    samples: *const f32,
+    samples_len: Word,
+    rays: *mut f32,
+    rays_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (p, n, tri, samples) = unsafe {
+        (
+            point(array(p, p_len)),
+            point(array(n, n_len)),
+            triangle(array(tri, tri_len)),
+            points(array(samples, samples_len)),
+        )
+    };
+    let written = match (p, n, tri, samples) {
+        (Some(p), Some(n), Some(tri), Some(s))
+            if !s.is_empty() && (RAY_FLOATS * s.len()) as Word <= rays_len =>
+        {
+            // SAFETY: `rays` is valid for `rays_len` >= 8m floats.
+            let out = unsafe { std::slice::from_raw_parts_mut(rays, RAY_FLOATS * s.len()) };
+            let mut cast = 0;
+            for (ray, x) in out.chunks_exact_mut(RAY_FLOATS).zip(&s) {
+                ray.fill(0.0);
+                ray[..3].copy_from_slice(&x.to_array());
+            }
+            let config = FormFactorConfig::default();
+            form_factor_with(p, n, &tri, &s, &config, |k, origin, dir, tmax| {
+                let ray = &mut out[RAY_FLOATS * k..RAY_FLOATS * (k + 1)];
+                ray[..3].copy_from_slice(&origin.to_array());
+                ray[3..6].copy_from_slice(&dir.to_array());
+                ray[6] = 0.0;
+                ray[7] = tmax;
+                cast += 1;
+                false
+            });
+            cast
+        }
+        _ => -1,
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
 #[cfg(test)]
 mod test {
     use super::*;
@@ -335,6 +414,76 @@ mod test {
             )
         };
         out
+    }
+
+    fn shadow(s: &[f32], p: [f32; 3], rays: &mut [f32]) -> Word {
+        let e = entry("RAD.SHADOW.RAYS");
+        type F = unsafe extern "C" fn(
+            *const f32,
+            Word,
+            *const f32,
+            Word,
+            *const f32,
+            Word,
+            *const f32,
+            Word,
+            *mut f32,
+            Word,
+            *mut Word,
+        );
+        // SAFETY: the table says this is the signature.
+        let f: F = unsafe { std::mem::transmute(e.addr) };
+        let (n, tri) = ([0.0f32, 1.0, 0.0], SOURCE);
+        let mut count = 0;
+        // SAFETY: valid slices and result.
+        unsafe {
+            f(
+                p.as_ptr(),
+                3,
+                n.as_ptr(),
+                3,
+                tri.as_ptr(),
+                9,
+                s.as_ptr(),
+                s.len() as Word,
+                rays.as_mut_ptr(),
+                rays.len() as Word,
+                &mut count,
+            )
+        };
+        count
+    }
+
+    #[test]
+    fn shadow_rays_are_the_ones_the_form_factor_asks_for() {
+        let mut s = [0.0f32; 48];
+        assert_eq!(samples(&SOURCE, 16, 5, &mut s), 16);
+        let mut rays = [7.0f32; 8 * 16];
+        assert_eq!(shadow(&s, [0.3, 0.0, 0.3], &mut rays), 16);
+        let pts = points(&s).expect("samples");
+        let (p, n) = (Vec3::new(0.3, 0.0, 0.3), Vec3::Y);
+        let mut asked = Vec::new();
+        let src = triangle(&SOURCE).expect("tri");
+        let config = FormFactorConfig::default();
+        form_factor_with(p, n, &src, &pts, &config, |k, o, d, t| {
+            asked.push((k, o, d, t));
+            false
+        });
+        assert_eq!(asked.len(), 16);
+        for (k, o, d, t) in asked {
+            let r = &rays[8 * k..8 * k + 8];
+            assert_eq!(r[..3], o.to_array());
+            assert_eq!(r[3..6], d.to_array());
+            assert_eq!((r[6], r[7]), (0.0, t));
+            // The ray ends just short of its sample.
+            assert!((o + d * t - pts[k]).length() < 2e-3);
+        }
+        // Behind the source: no rays, every slot empty.
+        assert_eq!(shadow(&s, [0.3, 2.0, 0.3], &mut rays), 0);
+        assert!(rays.chunks(8).all(|r| r[3..].iter().all(|x| *x == 0.0)));
+        let mut short = [7.0f32; 8 * 16 - 1];
+        assert_eq!(shadow(&s, [0.3, 0.0, 0.3], &mut short), -1);
+        assert!(short.iter().all(|x| *x == 7.0));
     }
 
     #[test]

@@ -292,9 +292,18 @@ impl Tr<'_, '_> {
                 }
                 ParamKind::ValReal32 | ParamKind::ValReal64 => vals.push(self.expr(a)?),
                 ParamKind::ResultInt | ParamKind::ResultReal32 | ParamKind::ResultBool => {
-                    // The intrinsic writes a temporary word; it is copied back below.
+                    // The intrinsic reads and writes a temporary word holding the variable's
+                    // value (so a reference `INT x` is in/out); it is copied back below.
                     let off = self.frame.alloc(8);
                     let t = self.local_addr(off);
+                    let zero = self.iconst(0);
+                    self.b.ins().store(mem(), zero, t, 0);
+                    let v = self.expr(a)?;
+                    let v = match k {
+                        ParamKind::ResultReal32 => v,
+                        _ => self.widen_i64(v, a),
+                    };
+                    self.b.ins().store(mem(), v, t, 0);
                     vals.push(t);
                 }
                 _ => {

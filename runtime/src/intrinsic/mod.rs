@@ -7,9 +7,10 @@
 //! - `VAL REAL32`/`REAL64` pass an `f32`/`f64`;
 //! - an array (`VAL []T` or `[]T`) passes two words, the address of element 0 and the element
 //!   count;
-//! - `RESULT`/`VAR` scalars pass the address of a word-sized temporary the intrinsic writes
-//!   (INT and BOOL: a whole `i64` word, BOOL 0 or 1; REAL32: an `f32` at the address); the
-//!   caller copies it to the variable after the call.
+//! - `RESULT`/`VAR` scalars pass the address of a word-sized temporary holding the variable's
+//!   value on entry, which the intrinsic may read and writes (INT and BOOL: a whole `i64` word,
+//!   BOOL 0 or 1; REAL32: an `f32` at the address); the caller copies it to the variable after
+//!   the call.
 //!
 //! Array elements are stored as occam stores them: INT 4 bytes (`i32`), BOOL and BYTE one byte
 //! (BOOL 0 or 1), REAL32/REAL64 IEEE floats.
