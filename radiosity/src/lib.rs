@@ -18,6 +18,7 @@
 
 pub mod formfactor;
 pub mod geom;
+pub mod grid;
 pub mod intrinsics;
 pub mod kernels;
 pub mod mesh;

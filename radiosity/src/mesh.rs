@@ -18,6 +18,7 @@ use std::collections::{BinaryHeap, HashMap};
 use glam::Vec3;
 
 use crate::geom::{Tri, plane_cut_segment};
+use crate::grid::BoxGrid;
 use crate::scene::Scene;
 
 /// A sample point: where radiosity is computed and stored.
@@ -107,11 +108,15 @@ fn edge_key(a: u32, b: u32) -> (u32, u32) {
 impl Mesh {
     /// Meshes a scene (see the module doc for the steps).
     pub fn from_scene(scene: &Scene, config: MeshConfig) -> Mesh {
+        Mesh::build(scene, config, Search::Grid)
+    }
+
+    fn build(scene: &Scene, config: MeshConfig, search: Search) -> Mesh {
         let eps = 1e-5 * scene.diagonal().max(1e-30);
         let mut mesh = Mesh::welded(scene, eps);
         mesh.stats.input_triangles = mesh.elements.len();
         mesh.stats.t_junction_splits = mesh.split_t_junctions(eps);
-        mesh.stats.d0_splits = mesh.split_d0(eps);
+        mesh.stats.d0_splits = mesh.split_d0(eps, search);
         mesh.stats.t_junction_splits += mesh.split_t_junctions(eps);
         mesh.subdivide(config.patch_size.max(eps * 10.0));
         mesh.patches = mesh.elements.iter().map(|e| mesh.tri(e)).collect();
@@ -268,49 +273,95 @@ impl Mesh {
         list
     }
 
-    /// Splits coplanar triangles' edges at vertices lying inside them (T-junctions).
+    /// Splits coplanar triangles' edges at vertices lying inside them (T-junctions). Each sweep
+    /// splits every edge at every vertex found on it; the edges those splits create are looked
+    /// at by the next sweep.
     fn split_t_junctions(&mut self, eps: f32) -> usize {
         let mut splits = 0;
-        for _pass in 0..64 {
-            let Some((a, b, v)) = self.find_t_junction(eps) else {
+        for _sweep in 0..64 {
+            let found = self.t_junctions(eps);
+            if found.is_empty() {
                 break;
-            };
-            splits += self.split_edge(a, b, v).len().min(1);
+            }
+            for ((a, b), on_edge) in found {
+                let mut from = a;
+                for v in on_edge {
+                    if !self.edges.contains_key(&edge_key(from, b)) {
+                        break;
+                    }
+                    splits += self.split_edge(from, b, v).len().min(1);
+                    from = v;
+                }
+            }
         }
         splits
     }
 
-    fn find_t_junction(&self, eps: f32) -> Option<(u32, u32, u32)> {
-        for (&(a, b), _) in self.edges.iter() {
+    /// Returns each edge `(a, b)` (in edge order) with the vertices of the same surface lying
+    /// inside it, ordered from `a` to `b`.
+    fn t_junctions(&self, eps: f32) -> Vec<((u32, u32), Vec<u32>)> {
+        let edges = self.edge_list();
+        let mut lengths: Vec<f32> = edges
+            .iter()
+            .map(|&(a, b)| (self.pos(a) - self.pos(b)).length())
+            .collect();
+        if lengths.is_empty() {
+            return Vec::new();
+        }
+        let mid = lengths.len() / 2;
+        let cell = lengths
+            .select_nth_unstable_by(mid, f32::total_cmp)
+            .1
+            .max(eps);
+        let mut grid = BoxGrid::new(cell);
+        for (v, vert) in self.vertices.iter().enumerate() {
+            grid.insert(v as u32, vert.pos, vert.pos);
+        }
+        let mut near = Vec::new();
+        let mut found = Vec::new();
+        for (a, b) in edges {
             let (pa, pb) = (self.pos(a), self.pos(b));
             let n = self.vertices[a as usize].normal;
-            let (lo, hi) = (pa.min(pb) - Vec3::splat(eps), pa.max(pb) + Vec3::splat(eps));
-            for (v, vert) in self.vertices.iter().enumerate() {
-                let v = v as u32;
-                if v == a || v == b || vert.normal.dot(n) < 0.999 {
-                    continue;
-                }
-                let p = vert.pos;
-                if p.cmplt(lo).any() || p.cmpgt(hi).any() {
-                    continue;
-                }
-                let ab = pb - pa;
-                let s = (p - pa).dot(ab) / ab.length_squared();
-                if s > 1e-4 && s < 1.0 - 1e-4 && (pa + ab * s - p).length() < eps {
-                    return Some((a, b, v));
-                }
+            let ab = pb - pa;
+            grid.query_segment(pa, pb, eps, &mut near);
+            let mut on_edge: Vec<(f32, u32)> = near
+                .iter()
+                .copied()
+                .filter(|&v| v != a && v != b)
+                .filter(|&v| self.vertices[v as usize].normal.dot(n) >= 0.999)
+                .filter_map(|v| {
+                    let p = self.pos(v);
+                    let s = (p - pa).dot(ab) / ab.length_squared();
+                    (s > 1e-4 && s < 1.0 - 1e-4 && (pa + ab * s - p).length() < eps)
+                        .then_some((s, v))
+                })
+                .collect();
+            if !on_edge.is_empty() {
+                on_edge.sort_by(|x, y| x.0.total_cmp(&y.0));
+                found.push(((a, b), on_edge.into_iter().map(|(_, v)| v).collect()));
             }
         }
-        None
+        found
     }
 
     /// Splits triangles along the segments where triangles of other planes cut or touch them.
-    fn split_d0(&mut self, eps: f32) -> usize {
+    fn split_d0(&mut self, eps: f32, search: Search) -> usize {
         let base: Vec<Tri> = self.elements.iter().map(|e| self.tri(e)).collect();
+        let boxes: Vec<(Vec3, Vec3)> = base.iter().map(|t| padded_box(t, eps)).collect();
+        let grid = BoxGrid::over(&boxes);
+        let mut near = Vec::new();
         let mut cuts: Vec<(Vec3, Vec3, Vec3)> = Vec::new(); // (p, q, plane normal)
         for (i, a) in base.iter().enumerate() {
-            for (j, b) in base.iter().enumerate() {
-                if i == j || a.normal().dot(b.normal()).abs() > 0.999 || !boxes_touch(a, b, eps) {
+            match search {
+                Search::Grid => grid.query_box(boxes[i].0, boxes[i].1, &mut near),
+                Search::Everything => near = (0..base.len() as u32).collect(),
+            }
+            for &j in &near {
+                let b = &base[j as usize];
+                if i == j as usize
+                    || a.normal().dot(b.normal()).abs() > 0.999
+                    || !boxes_touch(a, b, eps)
+                {
                     continue;
                 }
                 if let Some((p, q)) = plane_cut_segment(a, b, eps) {
@@ -318,10 +369,15 @@ impl Mesh {
                 }
             }
         }
+        let mut index = ElementIndex::new(self, eps);
         let mut splits = 0;
         for (p, q, n) in cuts {
             for _guard in 0..256 {
-                let Some(t) = self.find_straddler(p, q, n, eps) else {
+                match search {
+                    Search::Grid => index.candidates(self, p, q, &mut near),
+                    Search::Everything => near = (0..self.elements.len() as u32).collect(),
+                }
+                let Some(t) = self.find_straddler(&near, p, q, n, eps) else {
                     break;
                 };
                 splits += self.cut_element(t, p, q, n, eps);
@@ -330,11 +386,19 @@ impl Mesh {
         splits
     }
 
-    /// Finds an element in the plane of segment `(p, q)` whose interior the segment crosses.
-    fn find_straddler(&self, p: Vec3, q: Vec3, n: Vec3, eps: f32) -> Option<usize> {
+    /// Finds the first of `candidates` in the plane of segment `(p, q)` whose interior the
+    /// segment crosses.
+    fn find_straddler(
+        &self,
+        candidates: &[u32],
+        p: Vec3,
+        q: Vec3,
+        n: Vec3,
+        eps: f32,
+    ) -> Option<usize> {
         let m = n.cross(q - p).normalize_or_zero();
-        self.elements.iter().position(|e| {
-            let t = self.tri(e);
+        candidates.iter().map(|&c| c as usize).find(|&c| {
+            let t = self.tri(&self.elements[c]);
             let tn = t.normal();
             if tn.dot(n) < 0.999 || tn.dot(p - t.v[0]).abs() > eps || tn.dot(q - t.v[0]).abs() > eps
             {
@@ -402,6 +466,57 @@ impl Mesh {
     }
 }
 
+/// How D0 splitting finds candidates: through grids (the real thing), or by scanning everything
+/// (the slow oracle the tests compare it with; both must give the same mesh).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Search {
+    Grid,
+    #[cfg_attr(not(test), allow(dead_code))]
+    Everything,
+}
+
+/// A grid over the elements as they were when it was built, plus the elements added since
+/// (splitting only shrinks an element, and its new halves lie inside the old box, so the grid
+/// stays conservative). It is rebuilt when the added elements grow to a quarter of it.
+struct ElementIndex {
+    grid: BoxGrid,
+    built: usize,
+    eps: f32,
+}
+
+impl ElementIndex {
+    fn new(mesh: &Mesh, eps: f32) -> ElementIndex {
+        let boxes: Vec<(Vec3, Vec3)> = mesh
+            .elements
+            .iter()
+            .map(|e| padded_box(&mesh.tri(e), eps))
+            .collect();
+        ElementIndex {
+            grid: BoxGrid::over(&boxes),
+            built: boxes.len(),
+            eps,
+        }
+    }
+
+    /// Puts into `out`, in increasing order, every element that may meet segment `(p, q)`.
+    fn candidates(&mut self, mesh: &Mesh, p: Vec3, q: Vec3, out: &mut Vec<u32>) {
+        if mesh.elements.len() - self.built > (self.built / 4).max(1024) {
+            *self = ElementIndex::new(mesh, self.eps);
+        }
+        self.grid.query_segment(p, q, self.eps, out);
+        out.extend(self.built as u32..mesh.elements.len() as u32);
+    }
+}
+
+/// The triangle's bounding box, widened by `eps`.
+fn padded_box(t: &Tri, eps: f32) -> (Vec3, Vec3) {
+    let e = Vec3::splat(eps);
+    (
+        t.v[0].min(t.v[1]).min(t.v[2]) - e,
+        t.v[0].max(t.v[1]).max(t.v[2]) + e,
+    )
+}
+
 fn boxes_touch(a: &Tri, b: &Tri, eps: f32) -> bool {
     let (alo, ahi) = (
         a.v[0].min(a.v[1]).min(a.v[2]),
@@ -453,7 +568,73 @@ mod tests {
         assert!(mesh.stats.d0_splits > 0, "{:?}", mesh.stats);
         // No floor element straddles the line of the short block's front face (z from 65 to 114).
         let (p, q) = (Vec3::new(130.0, 0.0, 65.0), Vec3::new(290.0, 0.0, 114.0));
-        assert!(mesh.find_straddler(p, q, Vec3::Y, 1e-3).is_none());
+        let all: Vec<u32> = (0..mesh.elements.len() as u32).collect();
+        assert!(mesh.find_straddler(&all, p, q, Vec3::Y, 1e-3).is_none());
+    }
+
+    /// A scene of one object from triangles in the plane y = 0 given by (x, z) corners.
+    fn flat_scene(tris: &[[(f32, f32); 3]]) -> Scene {
+        use crate::scene::{Object, SceneTri};
+        let v = |(x, z): (f32, f32)| Vec3::new(x, 0.0, z);
+        Scene {
+            objects: vec![Object {
+                name: "floor".into(),
+                reflectance: Vec3::splat(0.5),
+                emission: Vec3::ZERO,
+            }],
+            triangles: tris
+                .iter()
+                .map(|t| SceneTri {
+                    tri: Tri::new(v(t[0]), v(t[1]), v(t[2])),
+                    object: 0,
+                })
+                .collect(),
+            ..Scene::default()
+        }
+    }
+
+    #[test]
+    fn grid_search_meshes_exactly_as_scanning_everything() {
+        let cornell = cornell::load(true).expect("scene");
+        let config = MeshConfig {
+            patch_size: 1e6,
+            element_size: 1e6,
+        };
+        let fast = Mesh::build(&cornell, config, Search::Grid);
+        let slow = Mesh::build(&cornell, config, Search::Everything);
+        assert!(fast.stats.d0_splits > 10, "{:?}", fast.stats);
+        assert_eq!(fast.stats, slow.stats);
+        assert_eq!(fast.vertices, slow.vertices);
+        assert_eq!(fast.elements, slow.elements);
+    }
+
+    #[test]
+    fn every_t_junction_along_a_long_edge_is_split() {
+        // A 100 x 10 strip (two triangles) under a strip cut into 100 columns: 99 vertices lie
+        // inside the first strip's top edge. All must be split, leaving a conforming mesh.
+        let mut tris = vec![
+            [(0.0, 0.0), (0.0, 10.0), (100.0, 10.0)],
+            [(0.0, 0.0), (100.0, 10.0), (100.0, 0.0)],
+        ];
+        for i in 0..100 {
+            let (x0, x1) = (i as f32, i as f32 + 1.0);
+            tris.push([(x0, 10.0), (x0, 20.0), (x1, 20.0)]);
+            tris.push([(x0, 10.0), (x1, 20.0), (x1, 10.0)]);
+        }
+        let mesh = Mesh::from_scene(
+            &flat_scene(&tris),
+            MeshConfig {
+                patch_size: 1e3,
+                element_size: 1e3,
+            },
+        );
+        assert_eq!(mesh.stats.t_junction_splits, 99);
+        for (a, b) in mesh.edge_list() {
+            let n = mesh.elements_on_edge(a, b).len();
+            let mid = (mesh.vertices[a as usize].pos + mesh.vertices[b as usize].pos) * 0.5;
+            let outer = mid.x == 0.0 || mid.x == 100.0 || mid.z == 0.0 || mid.z == 20.0;
+            assert_eq!(n, if outer { 1 } else { 2 }, "edge {a}-{b} at {mid}");
+        }
     }
 
     #[test]

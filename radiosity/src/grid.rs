@@ -1,0 +1,190 @@
+//! A uniform hash grid over boxes: which items lie near a box or along a segment, without
+//! testing every pair. Meshing uses it to find intersecting triangles, the elements a cut
+//! crosses and the vertices lying on edges, so that preparing a scene of n triangles costs about
+//! n, not n².
+//!
+//! Queries are conservative: they return every item whose box meets the query (and possibly some
+//! that do not); callers apply their exact test to what comes back. Results are sorted and free
+//! of duplicates, so a caller that takes the first match finds the same one a full scan would.
+
+use std::collections::HashMap;
+
+use glam::{IVec3, Vec3};
+
+/// Boxes spanning more cells than this are kept in a list that every query returns, and query
+/// boxes spanning more cells return every item.
+const MAX_CELLS: i64 = 512;
+
+/// The grid. Items are `u32` ids.
+#[derive(Clone, Debug)]
+pub struct BoxGrid {
+    inv_cell: f32,
+    cells: HashMap<IVec3, Vec<u32>>,
+    /// Items too large to enter cell by cell.
+    large: Vec<u32>,
+    /// Every id inserted, for queries too large to answer cell by cell.
+    all: Vec<u32>,
+}
+
+impl BoxGrid {
+    /// An empty grid with cells `cell` wide (at least 1e-30).
+    pub fn new(cell: f32) -> BoxGrid {
+        BoxGrid {
+            inv_cell: 1.0 / cell.max(1e-30),
+            cells: HashMap::new(),
+            large: Vec::new(),
+            all: Vec::new(),
+        }
+    }
+
+    /// A grid whose cell is the median largest extent of `boxes` (so a typical box meets a few
+    /// cells), with every box inserted under its index.
+    pub fn over(boxes: &[(Vec3, Vec3)]) -> BoxGrid {
+        let mut extents: Vec<f32> = boxes
+            .iter()
+            .map(|(lo, hi)| (*hi - *lo).max_element())
+            .collect();
+        let cell = if extents.is_empty() {
+            1.0
+        } else {
+            let mid = extents.len() / 2;
+            *extents.select_nth_unstable_by(mid, f32::total_cmp).1
+        };
+        let mut grid = BoxGrid::new(cell);
+        for (i, (lo, hi)) in boxes.iter().enumerate() {
+            grid.insert(i as u32, *lo, *hi);
+        }
+        grid
+    }
+
+    /// The cells a box covers, or `None` when that is more than [`MAX_CELLS`] (or not finite).
+    fn span(&self, lo: Vec3, hi: Vec3) -> Option<(IVec3, IVec3)> {
+        let to_cell = |p: Vec3| (p * self.inv_cell).floor();
+        let (a, b) = (to_cell(lo), to_cell(hi));
+        if !(a.is_finite() && b.is_finite()) || (b - a).abs().max_element() > 1e6 {
+            return None;
+        }
+        let (a, b) = (a.as_ivec3(), b.as_ivec3());
+        let n = (b - a + IVec3::ONE).as_i64vec3();
+        (n.x * n.y * n.z <= MAX_CELLS).then_some((a, b))
+    }
+
+    /// Inserts item `id` with box `lo..hi`.
+    pub fn insert(&mut self, id: u32, lo: Vec3, hi: Vec3) {
+        self.all.push(id);
+        let Some((a, b)) = self.span(lo, hi) else {
+            self.large.push(id);
+            return;
+        };
+        for z in a.z..=b.z {
+            for y in a.y..=b.y {
+                for x in a.x..=b.x {
+                    self.cells.entry(IVec3::new(x, y, z)).or_default().push(id);
+                }
+            }
+        }
+    }
+
+    /// Puts into `out` (cleared first, sorted, deduplicated) every item whose box may meet
+    /// `lo..hi`.
+    pub fn query_box(&self, lo: Vec3, hi: Vec3, out: &mut Vec<u32>) {
+        out.clear();
+        self.collect_box(lo, hi, out);
+        finish(out);
+    }
+
+    /// Puts into `out` (cleared first, sorted, deduplicated) every item whose box may come
+    /// within `radius` of the segment `p..q`. The segment is walked in steps of half a cell, so
+    /// a long diagonal segment touches the cells along it rather than its whole bounding box.
+    pub fn query_segment(&self, p: Vec3, q: Vec3, radius: f32, out: &mut Vec<u32>) {
+        out.clear();
+        let cell = 1.0 / self.inv_cell;
+        let steps = ((q - p).length() / (0.5 * cell)).ceil().clamp(1.0, 1e6) as usize;
+        let half = Vec3::splat(0.5 * (q - p).length() / steps as f32 + radius);
+        for k in 0..steps {
+            let c = p.lerp(q, (k as f32 + 0.5) / steps as f32);
+            self.collect_box(c - half, c + half, out);
+        }
+        finish(out);
+    }
+
+    fn collect_box(&self, lo: Vec3, hi: Vec3, out: &mut Vec<u32>) {
+        let Some((a, b)) = self.span(lo, hi) else {
+            out.extend_from_slice(&self.all);
+            return;
+        };
+        out.extend_from_slice(&self.large);
+        for z in a.z..=b.z {
+            for y in a.y..=b.y {
+                for x in a.x..=b.x {
+                    if let Some(ids) = self.cells.get(&IVec3::new(x, y, z)) {
+                        out.extend_from_slice(ids);
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn finish(out: &mut Vec<u32>) {
+    out.sort_unstable();
+    out.dedup();
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+    use crate::rng::Pcg32;
+
+    fn random_box(rng: &mut Pcg32, size: f32) -> (Vec3, Vec3) {
+        let lo = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 100.0;
+        let ext = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * size;
+        (lo, lo + ext)
+    }
+
+    fn overlaps(a: (Vec3, Vec3), b: (Vec3, Vec3)) -> bool {
+        !(a.0.cmpgt(b.1).any() || b.0.cmpgt(a.1).any())
+    }
+
+    #[test]
+    fn box_queries_return_every_overlapping_box() {
+        let mut rng = Pcg32::new(11, 1);
+        // Mostly small boxes and a few huge ones (which go to the large list).
+        let boxes: Vec<_> = (0..2000)
+            .map(|i| random_box(&mut rng, if i % 100 == 0 { 90.0 } else { 3.0 }))
+            .collect();
+        let grid = BoxGrid::over(&boxes);
+        let mut out = Vec::new();
+        for _ in 0..500 {
+            let q = random_box(&mut rng, 10.0);
+            grid.query_box(q.0, q.1, &mut out);
+            let expected: Vec<u32> = (0..boxes.len() as u32)
+                .filter(|&i| overlaps(boxes[i as usize], q))
+                .collect();
+            assert!(expected.iter().all(|i| out.binary_search(i).is_ok()));
+            assert!(out.windows(2).all(|w| w[0] < w[1]), "sorted, no duplicates");
+        }
+    }
+
+    #[test]
+    fn segment_queries_return_every_box_near_the_segment() {
+        let mut rng = Pcg32::new(12, 1);
+        let boxes: Vec<_> = (0..3000).map(|_| random_box(&mut rng, 2.0)).collect();
+        let grid = BoxGrid::over(&boxes);
+        let mut out = Vec::new();
+        for _ in 0..300 {
+            let (p, q) = random_box(&mut rng, 80.0);
+            grid.query_segment(p, q, 0.01, &mut out);
+            for (i, b) in boxes.iter().enumerate() {
+                // Distance from the segment to the box, by dense sampling of the segment.
+                let near = (0..=400).any(|k| {
+                    let c = p.lerp(q, k as f32 / 400.0);
+                    overlaps(*b, (c - Vec3::splat(0.01), c + Vec3::splat(0.01)))
+                });
+                if near {
+                    assert!(out.binary_search(&(i as u32)).is_ok(), "box {i} missed");
+                }
+            }
+        }
+    }
+}
