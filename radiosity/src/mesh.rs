@@ -641,25 +641,12 @@ mod tests {
     fn t_junction_is_split() {
         // A square: the lower-left half is one triangle; the upper-right half is two triangles
         // meeting at the midpoint of the diagonal, which is a T-junction on the first.
-        use crate::scene::{Object, SceneTri};
-        let v = |x: f32, z: f32| Vec3::new(x, 0.0, z);
         let tris = [
-            Tri::new(v(0.0, 0.0), v(0.0, 2.0), v(2.0, 0.0)),
-            Tri::new(v(0.0, 2.0), v(2.0, 2.0), v(1.0, 1.0)),
-            Tri::new(v(2.0, 2.0), v(2.0, 0.0), v(1.0, 1.0)),
+            [(0.0, 0.0), (0.0, 2.0), (2.0, 0.0)],
+            [(0.0, 2.0), (2.0, 2.0), (1.0, 1.0)],
+            [(2.0, 2.0), (2.0, 0.0), (1.0, 1.0)],
         ];
-        let scene = Scene {
-            objects: vec![Object {
-                name: "floor".into(),
-                reflectance: Vec3::splat(0.5),
-                emission: Vec3::ZERO,
-            }],
-            triangles: tris
-                .iter()
-                .map(|&tri| SceneTri { tri, object: 0 })
-                .collect(),
-            ..Scene::default()
-        };
+        let scene = flat_scene(&tris);
         let mesh = Mesh::from_scene(
             &scene,
             MeshConfig {

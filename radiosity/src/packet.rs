@@ -225,20 +225,18 @@ mod test {
         Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE
     }
 
+    fn random_tris(rng: &mut Pcg32, n: usize) -> Vec<Tri> {
+        (0..n)
+            .map(|_| Tri::new(random_vec(rng), random_vec(rng), random_vec(rng)))
+            .collect()
+    }
+
     #[test]
     fn every_lane_answers_as_the_scalar_test() {
         let mut rng = Pcg32::new(3, 3);
         let mut hits = 0;
         for _ in 0..20_000 {
-            let tris: Vec<Tri> = (0..3)
-                .map(|_| {
-                    Tri::new(
-                        random_vec(&mut rng),
-                        random_vec(&mut rng),
-                        random_vec(&mut rng),
-                    )
-                })
-                .collect();
+            let tris = random_tris(&mut rng, 3);
             let p = TriPacket::pack(&tris);
             let (o, d) = (random_vec(&mut rng) * 2.0, random_vec(&mut rng));
             let (mask, t) = p.intersect(&RayQuery::new(o, d, 0.0, 3.0));
@@ -260,15 +258,7 @@ mod test {
     fn a_box_passes_every_ray_that_hits_its_packet() {
         let mut rng = Pcg32::new(5, 5);
         for _ in 0..20_000 {
-            let tris: Vec<Tri> = (0..4)
-                .map(|_| {
-                    Tri::new(
-                        random_vec(&mut rng),
-                        random_vec(&mut rng),
-                        random_vec(&mut rng),
-                    )
-                })
-                .collect();
+            let tris = random_tris(&mut rng, 4);
             let p = TriPacket::pack(&tris);
             let mut group = BoxGroup::EMPTY;
             let (lo, hi) = p.bounds(4);

@@ -18,17 +18,21 @@ const MODES: [Traversal; 3] = [Traversal::Samet, Traversal::Ropes, Traversal::Gl
 /// Build settings from many small voxels to few large ones.
 const SETTINGS: [(usize, u32); 3] = [(4, 10), (6, 12), (48, 5)];
 
+fn build(tris: &[Tri], max_leaf: usize, max_depth: u32) -> Octree {
+    Octree::build(
+        tris,
+        OctreeConfig {
+            max_leaf,
+            max_depth,
+        },
+    )
+}
+
 #[test]
 fn octree_equals_brute_force_between_random_surface_points() {
     let tris = cornell::grid_triangles(6).expect("cornell");
     for (max_leaf, max_depth) in SETTINGS {
-        let tree = Octree::build(
-            &tris,
-            OctreeConfig {
-                max_leaf,
-                max_depth,
-            },
-        );
+        let tree = build(&tris, max_leaf, max_depth);
         let mut rng = Pcg32::new(42, 1);
         let mut occluded = 0;
         for _ in 0..3000 {
@@ -63,13 +67,7 @@ fn rays_grazing_walls_equal_brute_force() {
         .map(|v| v.y)
         .fold(f32::INFINITY, f32::min);
     for (max_leaf, max_depth) in SETTINGS {
-        let tree = Octree::build(
-            &tris,
-            OctreeConfig {
-                max_leaf,
-                max_depth,
-            },
-        );
+        let tree = build(&tris, max_leaf, max_depth);
         let mut rng = Pcg32::new(77, 3);
         for k in 0..2000 {
             let h = [0.0, 1e-4, 1e-3, 1e-2, 1.0][k % 5];
@@ -98,13 +96,7 @@ fn rays_grazing_walls_equal_brute_force() {
 #[test]
 fn first_hit_equals_brute_force_nearest() {
     let tris = cornell::grid_triangles(4).expect("cornell");
-    let tree = Octree::build(
-        &tris,
-        OctreeConfig {
-            max_leaf: 4,
-            max_depth: 10,
-        },
-    );
+    let tree = build(&tris, 4, 10);
     let mut rng = Pcg32::new(9, 2);
     for _ in 0..2000 {
         let o = Vec3::new(
