@@ -178,34 +178,35 @@ impl BoxGroup {
         if r.any_parallel {
             return self.hits_parallel(r);
         }
-        let [lo, hi] = &self.sides;
-        let slab = |axis: usize| {
-            let t1 = (lo[axis] - r.o[axis]) * r.inv[axis];
-            let t2 = (hi[axis] - r.o[axis]) * r.inv[axis];
-            (t1.min(t2), t1.max(t2))
-        };
-        let (nx, fx) = slab(0);
-        let (ny, fy) = slab(1);
-        let (nz, fz) = slab(2);
-        let near = nx.max(ny).max(nz).max(Vec4::splat(r.tmin));
-        let far = fx.min(fy).min(fz).min(Vec4::splat(r.tmax));
-        near.cmple(far).bitmask()
+        self.hits_by(r, |axis| self.slab(r, axis))
     }
 
-    /// [`BoxGroup::hits`] for a ray that does not move along some axis.
+    /// [`BoxGroup::hits`] for a ray that does not move along some axis: there the slab is open
+    /// where the origin lies between the faces and empty elsewhere.
     #[cold]
     fn hits_parallel(&self, r: &RayQuery) -> u32 {
         let [lo, hi] = &self.sides;
-        let slab = |axis: usize| {
-            if r.parallel[axis] {
-                let inside = lo[axis].cmple(r.o[axis]) & r.o[axis].cmple(hi[axis]);
-                let open = Vec4::select(inside, Vec4::NEG_INFINITY, Vec4::INFINITY);
-                return (open, -open);
+        self.hits_by(r, |axis| {
+            if !r.parallel[axis] {
+                return self.slab(r, axis);
             }
-            let t1 = (lo[axis] - r.o[axis]) * r.inv[axis];
-            let t2 = (hi[axis] - r.o[axis]) * r.inv[axis];
-            (t1.min(t2), t1.max(t2))
-        };
+            let inside = lo[axis].cmple(r.o[axis]) & r.o[axis].cmple(hi[axis]);
+            let open = Vec4::select(inside, Vec4::NEG_INFINITY, Vec4::INFINITY);
+            (open, -open)
+        })
+    }
+
+    /// The parameters at which the ray enters and leaves each box's slab on `axis`.
+    #[inline(always)]
+    fn slab(&self, r: &RayQuery, axis: usize) -> (Vec4, Vec4) {
+        let t1 = (self.sides[0][axis] - r.o[axis]) * r.inv[axis];
+        let t2 = (self.sides[1][axis] - r.o[axis]) * r.inv[axis];
+        (t1.min(t2), t1.max(t2))
+    }
+
+    /// Intersects the three slabs `slab(axis)` with `tmin..tmax`; a bit for each non-empty one.
+    #[inline(always)]
+    fn hits_by(&self, r: &RayQuery, slab: impl Fn(usize) -> (Vec4, Vec4)) -> u32 {
         let (nx, fx) = slab(0);
         let (ny, fy) = slab(1);
         let (nz, fz) = slab(2);
