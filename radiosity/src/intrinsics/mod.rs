@@ -65,6 +65,22 @@ pub static INTRINSICS: &[Intrinsic] = &[
         result: None,
         addr: shadow_rays as *const u8,
     },
+    Intrinsic {
+        name: "RAD.SHOOT.BATCH",
+        params: &[
+            ValReal32s, ValReal32s, ValReal32s, ValReal32s, ValBools, VarReal32s, ResultInt,
+        ],
+        result: None,
+        addr: shoot_batch as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.SHADOW.RAYS.BATCH",
+        params: &[
+            ValReal32s, ValReal32s, ValReal32s, ValReal32s, VarReal32s, ResultInt,
+        ],
+        result: None,
+        addr: shadow_rays_batch as *const u8,
+    },
 ];
 
 /// Floats per ray written by `RAD.SHADOW.RAYS`: origin (3), direction (3), tmin, tmax (the
@@ -212,8 +228,7 @@ pub unsafe extern "C" fn form_factor_visible(
     };
     let value = match (p, n, tri, samples) {
         (Some(p), Some(n), Some(tri), Some(s)) if !s.is_empty() && s.len() == visible.len() => {
-            let config = FormFactorConfig::default();
-            form_factor_with(p, n, &tri, &s, &config, |k, _, _, _| visible[k] == 0).value
+            visible_form_factor(p, n, &tri, &s, visible)
         }
         _ => -1.0,
     };
@@ -262,22 +277,154 @@ pub unsafe extern "C" fn shadow_rays(
         {
             // SAFETY: `rays` is valid for `rays_len` >= 8m floats.
             let out = unsafe { std::slice::from_raw_parts_mut(rays, RAY_FLOATS * s.len()) };
-            let mut cast = 0;
-            for (ray, x) in out.chunks_exact_mut(RAY_FLOATS).zip(&s) {
-                ray.fill(0.0);
-                ray[..3].copy_from_slice(&x.to_array());
+            receiver_rays(p, n, &tri, &s, out)
+        }
+        _ => -1,
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
+/// One receiver's form factor given the visibility flag of each sample's ray
+/// (`visible.len() == samples.len()`).
+fn visible_form_factor(p: Vec3, n: Vec3, tri: &Tri, samples: &[Vec3], visible: &[u8]) -> f32 {
+    let config = FormFactorConfig::default();
+    form_factor_with(p, n, tri, samples, &config, |k, _, _, _| visible[k] == 0).value
+}
+
+/// Writes one receiver's shadow rays into `out` (`RAY_FLOATS` per sample, empty rays where none
+/// is cast) and returns how many are cast.
+fn receiver_rays(p: Vec3, n: Vec3, tri: &Tri, samples: &[Vec3], out: &mut [f32]) -> Word {
+    for (ray, x) in out.chunks_exact_mut(RAY_FLOATS).zip(samples) {
+        ray.fill(0.0);
+        ray[..3].copy_from_slice(&x.to_array());
+    }
+    let mut cast = 0;
+    let config = FormFactorConfig::default();
+    form_factor_with(p, n, tri, samples, &config, |k, origin, dir, tmax| {
+        if let Some(ray) = out.get_mut(RAY_FLOATS * k..RAY_FLOATS * (k + 1)) {
+            ray[..3].copy_from_slice(&origin.to_array());
+            ray[3..6].copy_from_slice(&dir.to_array());
+            ray[6] = 0.0;
+            ray[7] = tmax;
+            cast += 1;
+        }
+        false
+    });
+    cast
+}
+
+/// The receivers of a batch: `r` points and `r` normals (3r floats each, r ≥ 1).
+fn receivers(points_: &[f32], normals: &[f32]) -> Option<Vec<(Vec3, Vec3)>> {
+    let (p, n) = (points(points_)?, points(normals)?);
+    (!p.is_empty() && p.len() == n.len()).then(|| p.into_iter().zip(n).collect())
+}
+
+/// `PROC RAD.SHOOT.BATCH (VAL []REAL32 points, normals, VAL []REAL32 tri,
+/// VAL []REAL32 samples, VAL []BOOL visible, []REAL32 f, RESULT INT count)`: `RAD.FORM.FACTOR`
+/// for r receivers at once (`points`, `normals`: 3r floats), all seeing the source `tri` through
+/// the same m samples (3m floats); receiver i's flags are `visible[i*m .. i*m + m - 1]` (r·m in
+/// all), its form factor goes to `f[i]`. `count` is r, or -1 (and `f` untouched) when a length
+/// is wrong (`points` and `normals` not both 3r floats with r ≥ 1, `tri` not 9, `samples` not 3m
+/// with m ≥ 1, `visible` not r·m, `f` shorter than r). Unlike the Rust solver's
+/// `kernels::shoot_batch`, which draws fresh samples per receiver, the batch shares one set.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn shoot_batch(
+    points_: *const f32,
+    points_len: Word,
+    normals: *const f32,
+    normals_len: Word,
+    tri: *const f32,
+    tri_len: Word,
+    samples: *const f32,
+    samples_len: Word,
+    visible: *const u8,
+    visible_len: Word,
+    f: *mut f32,
+    f_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (rs, tri, samples, visible) = unsafe {
+        (
+            receivers(array(points_, points_len), array(normals, normals_len)),
+            triangle(array(tri, tri_len)),
+            points(array(samples, samples_len)),
+            array(visible, visible_len),
+        )
+    };
+    let written = match (rs, tri, samples) {
+        (Some(rs), Some(tri), Some(s))
+            if !s.is_empty()
+                && visible.len() == rs.len() * s.len()
+                && f_len >= rs.len() as Word =>
+        {
+            // SAFETY: `f` is valid for `f_len` >= r floats.
+            let f = unsafe { std::slice::from_raw_parts_mut(f, rs.len()) };
+            let flags = visible.chunks_exact(s.len());
+            for ((&(p, n), v), o) in rs.iter().zip(flags).zip(f.iter_mut()) {
+                *o = visible_form_factor(p, n, &tri, &s, v);
             }
-            let config = FormFactorConfig::default();
-            form_factor_with(p, n, &tri, &s, &config, |k, origin, dir, tmax| {
-                let ray = &mut out[RAY_FLOATS * k..RAY_FLOATS * (k + 1)];
-                ray[..3].copy_from_slice(&origin.to_array());
-                ray[3..6].copy_from_slice(&dir.to_array());
-                ray[6] = 0.0;
-                ray[7] = tmax;
-                cast += 1;
-                false
-            });
-            cast
+            rs.len() as Word
+        }
+        _ => -1,
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
+/// `PROC RAD.SHADOW.RAYS.BATCH (VAL []REAL32 points, normals, VAL []REAL32 tri,
+/// VAL []REAL32 samples, []REAL32 rays, RESULT INT count)`: `RAD.SHADOW.RAYS` for r receivers
+/// (`points`, `normals`: 3r floats) and one set of m samples: receiver i's rays are
+/// `rays[8m*i .. 8m*i + 8m - 1]` (8·r·m floats in all), in the order `RAD.SHOOT.BATCH` reads
+/// their flags. `count` is the number of rays cast in all, or -1 (and `rays` untouched) when a
+/// length is wrong or `rays` is shorter than 8·r·m floats.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn shadow_rays_batch(
+    points_: *const f32,
+    points_len: Word,
+    normals: *const f32,
+    normals_len: Word,
+    tri: *const f32,
+    tri_len: Word,
+    samples: *const f32,
+    samples_len: Word,
+    rays: *mut f32,
+    rays_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (rs, tri, samples) = unsafe {
+        (
+            receivers(array(points_, points_len), array(normals, normals_len)),
+            triangle(array(tri, tri_len)),
+            points(array(samples, samples_len)),
+        )
+    };
+    let written = match (rs, tri, samples) {
+        (Some(rs), Some(tri), Some(s))
+            if !s.is_empty()
+                && ((RAY_FLOATS * s.len()) as Word).saturating_mul(rs.len() as Word)
+                    <= rays_len =>
+        {
+            let per = RAY_FLOATS * s.len();
+            // SAFETY: `rays` is valid for `rays_len` >= 8·r·m floats.
+            let out = unsafe { std::slice::from_raw_parts_mut(rays, per * rs.len()) };
+            let each = rs.iter().zip(out.chunks_exact_mut(per));
+            each.map(|(&(p, n), o)| receiver_rays(p, n, &tri, &s, o))
+                .sum()
         }
         _ => -1,
     };
@@ -286,225 +433,4 @@ pub unsafe extern "C" fn shadow_rays(
 }
 
 #[cfg(test)]
-mod test {
-    use super::*;
-
-    type PointPolygon =
-        unsafe extern "C" fn(*const f32, Word, *const f32, Word, *const f32, Word, *mut f32);
-    type Samples = unsafe extern "C" fn(*const f32, Word, Word, Word, *mut f32, Word, *mut Word);
-    type FormFactor = unsafe extern "C" fn(
-        *const f32,
-        Word,
-        *const f32,
-        Word,
-        *const f32,
-        Word,
-        *const f32,
-        Word,
-        *const u8,
-        Word,
-        *mut f32,
-    );
-
-    fn entry(name: &str) -> &'static Intrinsic {
-        INTRINSICS.iter().find(|i| i.name == name).expect(name)
-    }
-
-    /// Calls RAD.POINT.POLYGON.FF through the table.
-    fn pp(p: &[f32], n: &[f32], poly: &[f32]) -> f32 {
-        let e = entry("RAD.POINT.POLYGON.FF");
-        assert_eq!(e.machine_params().len(), 7);
-        // SAFETY: the table says this is the signature.
-        let f: PointPolygon = unsafe { std::mem::transmute(e.addr) };
-        let mut out = 0.0;
-        // SAFETY: valid slices and result.
-        unsafe {
-            f(
-                p.as_ptr(),
-                p.len() as Word,
-                n.as_ptr(),
-                n.len() as Word,
-                poly.as_ptr(),
-                poly.len() as Word,
-                &mut out,
-            )
-        };
-        out
-    }
-
-    /// A unit square at height `h` centred over the origin.
-    fn square(h: f32) -> Vec<f32> {
-        vec![-0.5, h, -0.5, 0.5, h, -0.5, 0.5, h, 0.5, -0.5, h, 0.5]
-    }
-
-    #[test]
-    fn point_polygon_matches_the_closed_forms() {
-        let (p, n) = ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
-        assert!((pp(&p, &n, &square(1.0)) - 0.239456).abs() < 1e-5);
-        assert!((pp(&p, &n, &square(0.1)) - 0.968340).abs() < 1e-5);
-        assert_eq!(pp(&p[..2], &n, &square(1.0)), -1.0);
-        assert_eq!(pp(&p, &n, &square(1.0)[..11]), -1.0);
-        assert_eq!(pp(&p, &n, &square(1.0)[..6]), -1.0);
-    }
-
-    fn samples(tri: &[f32], m: Word, seed: Word, out: &mut [f32]) -> Word {
-        let e = entry("RAD.SOURCE.SAMPLES");
-        // SAFETY: the table says this is the signature.
-        let f: Samples = unsafe { std::mem::transmute(e.addr) };
-        let mut count = 0;
-        // SAFETY: valid slices and result.
-        unsafe {
-            f(
-                tri.as_ptr(),
-                tri.len() as Word,
-                m,
-                seed,
-                out.as_mut_ptr(),
-                out.len() as Word,
-                &mut count,
-            )
-        };
-        count
-    }
-
-    const TRI: [f32; 9] = [0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0];
-
-    #[test]
-    fn samples_are_the_solvers_and_bad_lengths_write_nothing() {
-        let mut out = [9.0f32; 3 * 25];
-        assert_eq!(samples(&TRI, 16, 7, &mut out), 16);
-        let mut rng = Pcg32::new(7, SAMPLE_STREAM);
-        let mut want = Vec::new();
-        source_samples(&triangle(&TRI).expect("tri"), 16, &mut rng, &mut want);
-        let got = points(&out[..48]).expect("points");
-        assert_eq!(got, want);
-        assert!(out[48..].iter().all(|x| *x == 9.0));
-        assert_eq!(samples(&TRI, 17, 7, &mut out), 25);
-        let mut short = [9.0f32; 3 * 16];
-        assert_eq!(samples(&TRI, 17, 7, &mut short), -1);
-        assert_eq!(samples(&TRI, 0, 7, &mut short), -1);
-        assert_eq!(samples(&TRI[..8], 4, 7, &mut short), -1);
-        assert!(short.iter().all(|x| *x == 9.0));
-    }
-
-    /// A source triangle at height 1 facing down (-y), towards the receivers below.
-    const SOURCE: [f32; 9] = [0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0];
-
-    fn ff(s: &[f32], visible: &[u8]) -> f32 {
-        let e = entry("RAD.FORM.FACTOR");
-        // SAFETY: the table says this is the signature.
-        let f: FormFactor = unsafe { std::mem::transmute(e.addr) };
-        let (p, n) = ([0.3f32, 0.0, 0.3], [0.0f32, 1.0, 0.0]);
-        let tri = SOURCE;
-        let mut out = 0.0;
-        // SAFETY: valid slices and result.
-        unsafe {
-            f(
-                p.as_ptr(),
-                3,
-                n.as_ptr(),
-                3,
-                tri.as_ptr(),
-                9,
-                s.as_ptr(),
-                s.len() as Word,
-                visible.as_ptr(),
-                visible.len() as Word,
-                &mut out,
-            )
-        };
-        out
-    }
-
-    fn shadow(s: &[f32], p: [f32; 3], rays: &mut [f32]) -> Word {
-        let e = entry("RAD.SHADOW.RAYS");
-        type F = unsafe extern "C" fn(
-            *const f32,
-            Word,
-            *const f32,
-            Word,
-            *const f32,
-            Word,
-            *const f32,
-            Word,
-            *mut f32,
-            Word,
-            *mut Word,
-        );
-        // SAFETY: the table says this is the signature.
-        let f: F = unsafe { std::mem::transmute(e.addr) };
-        let (n, tri) = ([0.0f32, 1.0, 0.0], SOURCE);
-        let mut count = 0;
-        // SAFETY: valid slices and result.
-        unsafe {
-            f(
-                p.as_ptr(),
-                3,
-                n.as_ptr(),
-                3,
-                tri.as_ptr(),
-                9,
-                s.as_ptr(),
-                s.len() as Word,
-                rays.as_mut_ptr(),
-                rays.len() as Word,
-                &mut count,
-            )
-        };
-        count
-    }
-
-    #[test]
-    fn shadow_rays_are_the_ones_the_form_factor_asks_for() {
-        let mut s = [0.0f32; 48];
-        assert_eq!(samples(&SOURCE, 16, 5, &mut s), 16);
-        let mut rays = [7.0f32; 8 * 16];
-        assert_eq!(shadow(&s, [0.3, 0.0, 0.3], &mut rays), 16);
-        let pts = points(&s).expect("samples");
-        let (p, n) = (Vec3::new(0.3, 0.0, 0.3), Vec3::Y);
-        let mut asked = Vec::new();
-        let src = triangle(&SOURCE).expect("tri");
-        let config = FormFactorConfig::default();
-        form_factor_with(p, n, &src, &pts, &config, |k, o, d, t| {
-            asked.push((k, o, d, t));
-            false
-        });
-        assert_eq!(asked.len(), 16);
-        for (k, o, d, t) in asked {
-            let r = &rays[8 * k..8 * k + 8];
-            assert_eq!(r[..3], o.to_array());
-            assert_eq!(r[3..6], d.to_array());
-            assert_eq!((r[6], r[7]), (0.0, t));
-            // The ray ends just short of its sample.
-            assert!((o + d * t - pts[k]).length() < 2e-3);
-        }
-        // Behind the source: no rays, every slot empty.
-        assert_eq!(shadow(&s, [0.3, 2.0, 0.3], &mut rays), 0);
-        assert!(rays.chunks(8).all(|r| r[3..].iter().all(|x| *x == 0.0)));
-        let mut short = [7.0f32; 8 * 16 - 1];
-        assert_eq!(shadow(&s, [0.3, 0.0, 0.3], &mut short), -1);
-        assert!(short.iter().all(|x| *x == 7.0));
-    }
-
-    #[test]
-    fn form_factor_scales_with_the_visible_rays() {
-        let tri = SOURCE;
-        let mut s = [0.0f32; 48];
-        assert_eq!(samples(&tri, 16, 3, &mut s), 16);
-        let full = ff(&s, &[1; 16]);
-        let exact = point_polygon(
-            Vec3::new(0.3, 0.0, 0.3),
-            Vec3::Y,
-            &points(&tri).expect("tri"),
-        );
-        // Near the source the analytic form is used: exact when every ray gets through.
-        assert!(full > 0.0 && (full - exact).abs() < 1e-6, "{full} {exact}");
-        let mut half = [0u8; 16];
-        half[..8].fill(1);
-        assert!((ff(&s, &half) - full / 2.0).abs() < 1e-6);
-        assert_eq!(ff(&s, &[0; 16]), 0.0);
-        assert_eq!(ff(&s, &[1; 15]), -1.0);
-        assert_eq!(ff(&s[..47], &[1; 16]), -1.0);
-        assert_eq!(ff(&[], &[]), -1.0);
-    }
-}
+mod test;

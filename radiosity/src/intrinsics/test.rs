@@ -1,0 +1,387 @@
+//! The intrinsics called through their table addresses, as the code generator calls them.
+
+use super::*;
+
+type PointPolygon =
+    unsafe extern "C" fn(*const f32, Word, *const f32, Word, *const f32, Word, *mut f32);
+type Samples = unsafe extern "C" fn(*const f32, Word, Word, Word, *mut f32, Word, *mut Word);
+type FormFactor = unsafe extern "C" fn(
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    *const u8,
+    Word,
+    *mut f32,
+);
+
+fn entry(name: &str) -> &'static Intrinsic {
+    INTRINSICS.iter().find(|i| i.name == name).expect(name)
+}
+
+/// Calls RAD.POINT.POLYGON.FF through the table.
+fn pp(p: &[f32], n: &[f32], poly: &[f32]) -> f32 {
+    let e = entry("RAD.POINT.POLYGON.FF");
+    assert_eq!(e.machine_params().len(), 7);
+    // SAFETY: the table says this is the signature.
+    let f: PointPolygon = unsafe { std::mem::transmute(e.addr) };
+    let mut out = 0.0;
+    // SAFETY: valid slices and result.
+    unsafe {
+        f(
+            p.as_ptr(),
+            p.len() as Word,
+            n.as_ptr(),
+            n.len() as Word,
+            poly.as_ptr(),
+            poly.len() as Word,
+            &mut out,
+        )
+    };
+    out
+}
+
+/// A unit square at height `h` centred over the origin.
+fn square(h: f32) -> Vec<f32> {
+    vec![-0.5, h, -0.5, 0.5, h, -0.5, 0.5, h, 0.5, -0.5, h, 0.5]
+}
+
+#[test]
+fn point_polygon_matches_the_closed_forms() {
+    let (p, n) = ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    assert!((pp(&p, &n, &square(1.0)) - 0.239456).abs() < 1e-5);
+    assert!((pp(&p, &n, &square(0.1)) - 0.968340).abs() < 1e-5);
+    assert_eq!(pp(&p[..2], &n, &square(1.0)), -1.0);
+    assert_eq!(pp(&p, &n, &square(1.0)[..11]), -1.0);
+    assert_eq!(pp(&p, &n, &square(1.0)[..6]), -1.0);
+}
+
+fn samples(tri: &[f32], m: Word, seed: Word, out: &mut [f32]) -> Word {
+    let e = entry("RAD.SOURCE.SAMPLES");
+    // SAFETY: the table says this is the signature.
+    let f: Samples = unsafe { std::mem::transmute(e.addr) };
+    let mut count = 0;
+    // SAFETY: valid slices and result.
+    unsafe {
+        f(
+            tri.as_ptr(),
+            tri.len() as Word,
+            m,
+            seed,
+            out.as_mut_ptr(),
+            out.len() as Word,
+            &mut count,
+        )
+    };
+    count
+}
+
+const TRI: [f32; 9] = [0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0];
+
+#[test]
+fn samples_are_the_solvers_and_bad_lengths_write_nothing() {
+    let mut out = [9.0f32; 3 * 25];
+    assert_eq!(samples(&TRI, 16, 7, &mut out), 16);
+    let mut rng = Pcg32::new(7, SAMPLE_STREAM);
+    let mut want = Vec::new();
+    source_samples(&triangle(&TRI).expect("tri"), 16, &mut rng, &mut want);
+    let got = points(&out[..48]).expect("points");
+    assert_eq!(got, want);
+    assert!(out[48..].iter().all(|x| *x == 9.0));
+    assert_eq!(samples(&TRI, 17, 7, &mut out), 25);
+    let mut short = [9.0f32; 3 * 16];
+    assert_eq!(samples(&TRI, 17, 7, &mut short), -1);
+    assert_eq!(samples(&TRI, 0, 7, &mut short), -1);
+    assert_eq!(samples(&TRI[..8], 4, 7, &mut short), -1);
+    assert!(short.iter().all(|x| *x == 9.0));
+}
+
+/// A source triangle at height 1 facing down (-y), towards the receivers below.
+const SOURCE: [f32; 9] = [0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0];
+
+fn ff(s: &[f32], visible: &[u8]) -> f32 {
+    ff_at(s, visible, [0.3, 0.0, 0.3])
+}
+
+fn ff_at(s: &[f32], visible: &[u8], p: [f32; 3]) -> f32 {
+    let e = entry("RAD.FORM.FACTOR");
+    // SAFETY: the table says this is the signature.
+    let f: FormFactor = unsafe { std::mem::transmute(e.addr) };
+    let n = [0.0f32, 1.0, 0.0];
+    let tri = SOURCE;
+    let mut out = 0.0;
+    // SAFETY: valid slices and result.
+    unsafe {
+        f(
+            p.as_ptr(),
+            3,
+            n.as_ptr(),
+            3,
+            tri.as_ptr(),
+            9,
+            s.as_ptr(),
+            s.len() as Word,
+            visible.as_ptr(),
+            visible.len() as Word,
+            &mut out,
+        )
+    };
+    out
+}
+
+fn shadow(s: &[f32], p: [f32; 3], rays: &mut [f32]) -> Word {
+    let e = entry("RAD.SHADOW.RAYS");
+    type F = unsafe extern "C" fn(
+        *const f32,
+        Word,
+        *const f32,
+        Word,
+        *const f32,
+        Word,
+        *const f32,
+        Word,
+        *mut f32,
+        Word,
+        *mut Word,
+    );
+    // SAFETY: the table says this is the signature.
+    let f: F = unsafe { std::mem::transmute(e.addr) };
+    let (n, tri) = ([0.0f32, 1.0, 0.0], SOURCE);
+    let mut count = 0;
+    // SAFETY: valid slices and result.
+    unsafe {
+        f(
+            p.as_ptr(),
+            3,
+            n.as_ptr(),
+            3,
+            tri.as_ptr(),
+            9,
+            s.as_ptr(),
+            s.len() as Word,
+            rays.as_mut_ptr(),
+            rays.len() as Word,
+            &mut count,
+        )
+    };
+    count
+}
+
+#[test]
+fn shadow_rays_are_the_ones_the_form_factor_asks_for() {
+    let mut s = [0.0f32; 48];
+    assert_eq!(samples(&SOURCE, 16, 5, &mut s), 16);
+    let mut rays = [7.0f32; 8 * 16];
+    assert_eq!(shadow(&s, [0.3, 0.0, 0.3], &mut rays), 16);
+    let pts = points(&s).expect("samples");
+    let (p, n) = (Vec3::new(0.3, 0.0, 0.3), Vec3::Y);
+    let mut asked = Vec::new();
+    let src = triangle(&SOURCE).expect("tri");
+    let config = FormFactorConfig::default();
+    form_factor_with(p, n, &src, &pts, &config, |k, o, d, t| {
+        asked.push((k, o, d, t));
+        false
+    });
+    assert_eq!(asked.len(), 16);
+    for (k, o, d, t) in asked {
+        let r = &rays[8 * k..8 * k + 8];
+        assert_eq!(r[..3], o.to_array());
+        assert_eq!(r[3..6], d.to_array());
+        assert_eq!((r[6], r[7]), (0.0, t));
+        // The ray ends just short of its sample.
+        assert!((o + d * t - pts[k]).length() < 2e-3);
+    }
+    // Behind the source: no rays, every slot empty.
+    assert_eq!(shadow(&s, [0.3, 2.0, 0.3], &mut rays), 0);
+    assert!(rays.chunks(8).all(|r| r[3..].iter().all(|x| *x == 0.0)));
+    let mut short = [7.0f32; 8 * 16 - 1];
+    assert_eq!(shadow(&s, [0.3, 0.0, 0.3], &mut short), -1);
+    assert!(short.iter().all(|x| *x == 7.0));
+}
+
+#[test]
+fn form_factor_scales_with_the_visible_rays() {
+    let tri = SOURCE;
+    let mut s = [0.0f32; 48];
+    assert_eq!(samples(&tri, 16, 3, &mut s), 16);
+    let full = ff(&s, &[1; 16]);
+    let exact = point_polygon(
+        Vec3::new(0.3, 0.0, 0.3),
+        Vec3::Y,
+        &points(&tri).expect("tri"),
+    );
+    // Near the source the analytic form is used: exact when every ray gets through.
+    assert!(full > 0.0 && (full - exact).abs() < 1e-6, "{full} {exact}");
+    let mut half = [0u8; 16];
+    half[..8].fill(1);
+    assert!((ff(&s, &half) - full / 2.0).abs() < 1e-6);
+    assert_eq!(ff(&s, &[0; 16]), 0.0);
+    assert_eq!(ff(&s, &[1; 15]), -1.0);
+    assert_eq!(ff(&s[..47], &[1; 16]), -1.0);
+    assert_eq!(ff(&[], &[]), -1.0);
+}
+
+type Batch = unsafe extern "C" fn(
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    *const u8,
+    Word,
+    *mut f32,
+    Word,
+    *mut Word,
+);
+type RaysBatch = unsafe extern "C" fn(
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    *mut f32,
+    Word,
+    *mut Word,
+);
+
+#[test]
+fn batches_equal_the_single_calls() {
+    let mut s = [0.0f32; 48];
+    assert_eq!(samples(&SOURCE, 16, 9, &mut s), 16);
+    let pts = [0.3f32, 0.0, 0.3, 0.1, 0.2, 0.7, 0.3, 2.0, 0.3];
+    let nrm = [0.0f32, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0];
+    // SAFETY: the table says these are the signatures.
+    let (batch, rays_batch): (Batch, RaysBatch) = unsafe {
+        (
+            std::mem::transmute::<*const u8, Batch>(entry("RAD.SHOOT.BATCH").addr),
+            std::mem::transmute::<*const u8, RaysBatch>(entry("RAD.SHADOW.RAYS.BATCH").addr),
+        )
+    };
+    let mut rays = vec![0.0f32; 8 * 16 * 3];
+    let mut count = 0;
+    // SAFETY: valid slices and result.
+    unsafe {
+        rays_batch(
+            pts.as_ptr(),
+            9,
+            nrm.as_ptr(),
+            9,
+            SOURCE.as_ptr(),
+            9,
+            s.as_ptr(),
+            48,
+            rays.as_mut_ptr(),
+            rays.len() as Word,
+            &mut count,
+        )
+    };
+    // Receivers 0 and 1 cast every ray; receiver 2 is behind the source.
+    assert_eq!(count, 32);
+    let mut one = [0.0f32; 8 * 16];
+    for i in 0..3 {
+        let p = [pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]];
+        shadow(&s, p, &mut one);
+        assert_eq!(one[..], rays[128 * i..128 * (i + 1)]);
+    }
+    // Every other ray blocked.
+    let visible: Vec<u8> = (0..48).map(|k| (k % 2) as u8).collect();
+    let mut f = [9.0f32; 4];
+    // SAFETY: valid slices and result.
+    unsafe {
+        batch(
+            pts.as_ptr(),
+            9,
+            nrm.as_ptr(),
+            9,
+            SOURCE.as_ptr(),
+            9,
+            s.as_ptr(),
+            48,
+            visible.as_ptr(),
+            48,
+            f.as_mut_ptr(),
+            4,
+            &mut count,
+        )
+    };
+    assert_eq!(count, 3);
+    assert_eq!(f[3], 9.0);
+    for i in 0..3 {
+        let single = ff_at(
+            &s,
+            &visible[16 * i..16 * (i + 1)],
+            [pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]],
+        );
+        assert_eq!(f[i], single, "receiver {i}");
+    }
+    assert!(f[0] > 0.0 && f[2] == 0.0);
+    // Wrong lengths: -1, nothing written.
+    let mut g = [9.0f32; 2];
+    // SAFETY: valid slices and result.
+    unsafe {
+        batch(
+            pts.as_ptr(),
+            9,
+            nrm.as_ptr(),
+            9,
+            SOURCE.as_ptr(),
+            9,
+            s.as_ptr(),
+            48,
+            visible.as_ptr(),
+            48,
+            g.as_mut_ptr(),
+            2,
+            &mut count,
+        )
+    };
+    assert_eq!((count, g), (-1, [9.0; 2]));
+    // SAFETY: valid slices and result.
+    unsafe {
+        batch(
+            pts.as_ptr(),
+            9,
+            nrm.as_ptr(),
+            6,
+            SOURCE.as_ptr(),
+            9,
+            s.as_ptr(),
+            48,
+            visible.as_ptr(),
+            48,
+            f.as_mut_ptr(),
+            4,
+            &mut count,
+        )
+    };
+    assert_eq!(count, -1);
+    let mut short = vec![7.0f32; 8 * 16 * 3 - 1];
+    // SAFETY: valid slices and result.
+    unsafe {
+        rays_batch(
+            pts.as_ptr(),
+            9,
+            nrm.as_ptr(),
+            9,
+            SOURCE.as_ptr(),
+            9,
+            s.as_ptr(),
+            48,
+            short.as_mut_ptr(),
+            short.len() as Word,
+            &mut count,
+        )
+    };
+    assert_eq!(count, -1);
+    assert!(short.iter().all(|x| *x == 7.0));
+}
