@@ -51,7 +51,7 @@ pub fn parse(e: &ExternalText) -> Result<External, Vec<Diagnostic>> {
         .into_iter()
         .find(|d| d.severity == crate::diagnostic::Severity::Error);
     if let Some(d) = first {
-        let d = clamp(d, whole);
+        let d = clamp(d, whole, &e.text);
         let d = match d.help {
             Some(_) => d,
             None => d.with_help(HELP),
@@ -126,11 +126,19 @@ fn not_a_header(span: Span) -> Diagnostic {
 }
 
 /// Keeps a diagnostic of the header's parse inside the header (the parse also saw the body
-/// the header was completed with).
-fn clamp(mut d: Diagnostic, whole: Span) -> Diagnostic {
+/// the header was completed with), on character boundaries of `text` (which starts at offset
+/// `whole.start`).
+fn clamp(mut d: Diagnostic, whole: Span, text: &str) -> Diagnostic {
     if let Place::Output(span) = &mut d.place {
-        let start = span.start.clamp(whole.start, whole.end.saturating_sub(1));
-        let end = span.end.clamp(start + 1, whole.end.max(start + 1));
+        let floor = |offset: usize| {
+            let mut k = offset.clamp(whole.start, whole.end) - whole.start;
+            while k > 0 && !text.is_char_boundary(k) {
+                k -= 1;
+            }
+            whole.start + k
+        };
+        let start = floor(span.start.min(whole.end.saturating_sub(1)));
+        let end = floor(span.end).max(start);
         *span = Span::new(start, end);
     }
     d
@@ -185,9 +193,32 @@ mod test {
             let errors = parse(&text(t, 10)).expect_err(t);
             assert!(!errors.is_empty());
             assert!(errors[0].message.contains(needle), "{t}: {errors:?}");
+            assert_eq!(errors.len(), 1, "{t}: {errors:?}");
             for d in errors {
                 let Place::Output(s) = d.place else { panic!() };
-                assert!(s.start >= 10 && s.end <= 10 + t.len().max(1), "{t}: {s:?}");
+                assert!(s.start >= 10 && s.end <= 10 + t.len(), "{t}: {s:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn mangled_headers_never_panic_and_spans_stay_on_characters() {
+        let base = "REAL32, INT FUNCTION RAD.F (VAL []REAL32 p, n, RESULT BOOL é) = 0";
+        for cut in 0..=base.len() {
+            for (a, b) in [(0, cut), (cut, base.len())] {
+                let (Some(t), true) = (base.get(a..b), base.is_char_boundary(cut)) else {
+                    continue;
+                };
+                for text in [t.to_string(), format!("{t}é"), format!("PROC {t}")] {
+                    if let Err(errors) = parse(&self::text(&text, 5)) {
+                        for d in errors {
+                            let Place::Output(s) = d.place else { panic!() };
+                            assert!(s.start >= 5 && s.end <= 5 + text.len() && s.start <= s.end);
+                            assert!(text.is_char_boundary(s.start - 5), "{text}: {s:?}");
+                            assert!(text.is_char_boundary(s.end - 5), "{text}: {s:?}");
+                        }
+                    }
+                }
             }
         }
     }
