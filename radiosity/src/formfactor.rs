@@ -94,7 +94,8 @@ pub fn source_samples(src: &Tri, m: u32, rng: &mut Pcg32, out: &mut Vec<Vec3>) {
 
 /// Computes the form factor from the receiver `(p, n)` to source triangle `src` using the
 /// source samples `samples` (see [`source_samples`]) and shadow rays through `octree`
-/// (`None`: no occlusion).
+/// (`None`: no occlusion), walked with Samet's neighbours precomputed as ropes (the fastest
+/// traversal measured; all three give the same answers).
 pub fn form_factor(
     octree: Option<&Octree>,
     p: Vec3,
@@ -104,7 +105,7 @@ pub fn form_factor(
     config: &FormFactorConfig,
 ) -> FormFactor {
     form_factor_with(p, n, src, samples, config, |_, origin, d, tmax| {
-        octree.is_some_and(|o| o.occluded(origin, d, 0.0, tmax, Traversal::Samet))
+        octree.is_some_and(|o| o.occluded(origin, d, 0.0, tmax, Traversal::Ropes))
     })
 }
 

@@ -41,6 +41,9 @@ struct Node {
 
 const INTERIOR: u32 = u32::MAX;
 
+/// Floats a triangle in [`Octree::voxel_floats`]: corner 0, then the two edges from it.
+pub const VOXEL_TRI_FLOATS: usize = 9;
+
 /// A leaf face on the boundary of the root box has no neighbour.
 const NO_ROPE: u32 = u32::MAX;
 
@@ -284,6 +287,33 @@ impl Octree {
             }
             _ => (&[], &[]),
         }
+    }
+
+    /// The leaves (voxels) that hold triangles, by node index.
+    pub fn voxels(&self) -> impl Iterator<Item = usize> + '_ {
+        self.nodes
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| n.count != INTERIOR && n.count > 0)
+            .map(|(i, _)| i)
+    }
+
+    /// The triangles embedded in voxel `leaf` as the flat array a voxel message carries (and
+    /// `RAD.VOXEL.OCCLUDED` takes): [`VOXEL_TRI_FLOATS`] a triangle, corner 0 then the edges
+    /// to corners 1 and 2, exactly as the voxel stores them, so that a test on this array
+    /// answers exactly as the octree does. Empty for an interior node or an index out of range.
+    pub fn voxel_floats(&self, leaf: usize) -> Vec<f32> {
+        let (packets, ids) = self.voxel(leaf);
+        let mut out = Vec::new();
+        for (p, ids) in packets.iter().zip(ids) {
+            for lane in (0..LANES).filter(|&l| ids[l] != NO_TRIANGLE) {
+                let (v0, e1, e2) = p.lane(lane);
+                for v in [v0, e1, e2] {
+                    out.extend_from_slice(&v.to_array());
+                }
+            }
+        }
+        out
     }
 
     /// Calls `f(packet index)` for each packet of `leaf` (`[first, count]`) whose box the ray

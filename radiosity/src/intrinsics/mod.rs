@@ -22,6 +22,8 @@ use occ_runtime::intrinsic::{Intrinsic, ParamKind::*};
 
 use crate::formfactor::{FormFactorConfig, form_factor_with, point_polygon, source_samples};
 use crate::geom::Tri;
+use crate::octree::VOXEL_TRI_FLOATS;
+use crate::packet::{LANES, RayQuery, TriPacket};
 use crate::rng::Pcg32;
 
 /// Most rays `RAD.SOURCE.SAMPLES` accepts.
@@ -80,6 +82,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         ],
         result: None,
         addr: shadow_rays_batch as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.VOXEL.OCCLUDED",
+        params: &[ValReal32s, ValReal32s, VarBools, ResultInt],
+        result: None,
+        addr: voxel_occluded as *const u8,
     },
 ];
 
@@ -434,3 +442,76 @@ pub unsafe extern "C" fn shadow_rays_batch(
 
 #[cfg(test)]
 mod test;
+
+/// `RAD.VOXEL.OCCLUDED (VAL []REAL32 voxel, VAL []REAL32 rays, []BOOL blocked, RESULT INT
+/// count)`: the rays (8 floats each, as `RAD.SHADOW.RAYS` writes them) that the triangles of one
+/// voxel block (9 floats each, as [`Octree::voxel_floats`](crate::octree::Octree::voxel_floats)
+/// gives them). `blocked[k]` becomes TRUE when ray `k` meets a triangle and is left alone
+/// otherwise, so the answers of the voxels a ray crosses accumulate; `count` is the number of
+/// rays newly blocked, or -1 (nothing written) when `voxel` is not a multiple of 9 floats,
+/// `rays` not a multiple of 8, or `blocked` shorter than the number of rays. The test is the
+/// octree's own, so the verdict over all the voxels a ray crosses is the octree's verdict.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+pub unsafe extern "C" fn voxel_occluded(
+    voxel: *const f32,
+    voxel_len: Word,
+    rays: *const f32,
+    rays_len: Word,
+    blocked: *mut u8,
+    blocked_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (voxel, rays) = unsafe { (array(voxel, voxel_len), array(rays, rays_len)) };
+    let n_rays = rays.len() / RAY_FLOATS;
+    let fits = voxel.len().is_multiple_of(VOXEL_TRI_FLOATS)
+        && rays.len().is_multiple_of(RAY_FLOATS)
+        && n_rays as Word <= blocked_len;
+    let written = if fits {
+        // SAFETY: `blocked` is valid for `blocked_len` >= n_rays flags.
+        let blocked = unsafe { std::slice::from_raw_parts_mut(blocked, n_rays) };
+        block_rays(&voxel_packets(voxel), rays, blocked)
+    } else {
+        -1
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
+/// Packs a voxel's flat triangles four to a packet.
+fn voxel_packets(voxel: &[f32]) -> Vec<TriPacket> {
+    voxel
+        .chunks(VOXEL_TRI_FLOATS * LANES)
+        .map(|four| {
+            let mut p = TriPacket::EMPTY;
+            for (lane, t) in four.chunks_exact(VOXEL_TRI_FLOATS).enumerate() {
+                let v = |i: usize| Vec3::from_slice(&t[3 * i..3 * i + 3]);
+                p.set_lane(lane, v(0), v(1), v(2));
+            }
+            p
+        })
+        .collect()
+}
+
+/// Sets the flag of each ray a packet blocks; returns how many flags it set.
+fn block_rays(packets: &[TriPacket], rays: &[f32], blocked: &mut [u8]) -> Word {
+    let mut newly = 0;
+    for (r, b) in rays.chunks_exact(RAY_FLOATS).zip(blocked) {
+        if *b != 0 {
+            continue;
+        }
+        let q = RayQuery::new(
+            Vec3::from_slice(&r[0..3]),
+            Vec3::from_slice(&r[3..6]),
+            r[6],
+            r[7],
+        );
+        if packets.iter().any(|p| p.intersect(&q).0 != 0) {
+            *b = 1;
+            newly += 1;
+        }
+    }
+    newly
+}

@@ -385,3 +385,79 @@ fn batches_equal_the_single_calls() {
     assert_eq!(count, -1);
     assert!(short.iter().all(|x| *x == 7.0));
 }
+
+type VoxelOccluded =
+    unsafe extern "C" fn(*const f32, Word, *const f32, Word, *mut u8, Word, *mut Word);
+
+/// Calls RAD.VOXEL.OCCLUDED through the table; returns the count.
+fn voxel_occluded_call(voxel: &[f32], rays: &[f32], blocked: &mut [u8]) -> Word {
+    let e = entry("RAD.VOXEL.OCCLUDED");
+    // SAFETY: the table says this is the signature.
+    let f: VoxelOccluded = unsafe { std::mem::transmute(e.addr) };
+    let mut count = 0;
+    // SAFETY: valid slices and result.
+    unsafe {
+        f(
+            voxel.as_ptr(),
+            voxel.len() as Word,
+            rays.as_ptr(),
+            rays.len() as Word,
+            blocked.as_mut_ptr(),
+            blocked.len() as Word,
+            &mut count,
+        )
+    };
+    count
+}
+
+#[test]
+fn voxels_answer_together_what_the_octree_answers() {
+    use crate::octree::{Octree, OctreeConfig, Traversal};
+    use crate::scene::cornell;
+    // Every voxel of the octree tested on its own, as nodes holding different voxels would,
+    // blocks exactly the rays the octree says are blocked.
+    let tris = cornell::grid_triangles(4).expect("cornell");
+    let tree = Octree::build(&tris, OctreeConfig::default());
+    let mut rng = Pcg32::new(31, 4);
+    let mut rays = Vec::new();
+    for _ in 0..400 {
+        let a = &tris[rng.next_u32() as usize % tris.len()];
+        let b = &tris[rng.next_u32() as usize % tris.len()];
+        let o = a.sample(rng.next_f32(), rng.next_f32()) + a.normal() * 1e-3;
+        let d = b.sample(rng.next_f32(), rng.next_f32()) - o;
+        rays.extend(o.to_array());
+        rays.extend(d.to_array());
+        rays.extend([0.0, 0.999]);
+    }
+    let mut blocked = vec![0u8; 400];
+    let mut newly = 0;
+    for leaf in tree.voxels() {
+        newly += voxel_occluded_call(&tree.voxel_floats(leaf), &rays, &mut blocked);
+    }
+    let expected: Vec<u8> = rays
+        .chunks_exact(8)
+        .map(|r| {
+            let (o, d) = (Vec3::from_slice(&r[0..3]), Vec3::from_slice(&r[3..6]));
+            tree.occluded(o, d, 0.0, 0.999, Traversal::Ropes) as u8
+        })
+        .collect();
+    assert_eq!(blocked, expected);
+    assert_eq!(newly, expected.iter().map(|&b| b as Word).sum::<Word>());
+    assert!(newly > 40 && newly < 360, "{newly}");
+}
+
+#[test]
+fn voxel_occluded_rejects_bad_lengths_and_writes_nothing() {
+    let tri = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let ray = [0.2, 0.2, -1.0, 0.0, 0.0, 2.0, 0.0, 1.0];
+    let mut blocked = [0u8; 1];
+    assert_eq!(voxel_occluded_call(&tri[..8], &ray, &mut blocked), -1);
+    assert_eq!(voxel_occluded_call(&tri, &ray[..7], &mut blocked), -1);
+    assert_eq!(
+        voxel_occluded_call(&tri, &[ray, ray].concat(), &mut blocked),
+        -1
+    );
+    assert_eq!(blocked, [0]);
+    assert_eq!(voxel_occluded_call(&tri, &ray, &mut blocked), 1);
+    assert_eq!(blocked, [1]);
+}

@@ -59,6 +59,8 @@ pub enum ParamKind {
     VarReal32s,
     /// `VAL []BOOL`: address of one-byte elements (0 or 1) and length.
     ValBools,
+    /// `[]BOOL` (written): address of one-byte elements (0 or 1) and length.
+    VarBools,
     /// `RESULT REAL32` or `REAL32` (written): address of an `f32`.
     ResultReal32,
     /// `RESULT BOOL` or `BOOL` (written): address of a word the intrinsic sets to 0 or 1.
@@ -96,7 +98,8 @@ impl ParamKind {
             | ParamKind::VarInts
             | ParamKind::ValReal32s
             | ParamKind::VarReal32s
-            | ParamKind::ValBools => &[I64, I64],
+            | ParamKind::ValBools
+            | ParamKind::VarBools => &[I64, I64],
         }
     }
 
@@ -108,6 +111,7 @@ impl ParamKind {
             ParamKind::VarBytes
                 | ParamKind::VarInts
                 | ParamKind::VarReal32s
+                | ParamKind::VarBools
                 | ParamKind::ResultInt
                 | ParamKind::ResultReal32
                 | ParamKind::ResultBool
@@ -136,6 +140,7 @@ impl ParamKind {
             ParamKind::ValReal32s => "VAL []REAL32",
             ParamKind::VarReal32s => "[]REAL32",
             ParamKind::ValBools => "VAL []BOOL",
+            ParamKind::VarBools => "[]BOOL",
             ParamKind::ResultReal32 => "RESULT REAL32",
             ParamKind::ResultBool => "RESULT BOOL",
         }
