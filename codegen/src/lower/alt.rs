@@ -2,10 +2,18 @@
 //! disable in priority order (PRI ALT: textual; ALT: rotating from a per-site counter, for
 //! fairness), then run the selected branch. Nested ALTs are flattened; a replicated ALT enables
 //! and disables in loops, its branch number carrying the replication index.
+//!
+//! Fast path: an ALT whose guards are all unconditional inputs on channels first reads the
+//! channel words, in the order disabling would take them; the first holding a waiting outputter
+//! (a plain process word: not empty, not an external endpoint) is selected at once, with no
+//! enabling, waiting or disabling. A guard ready when the ALT starts may always be selected, so
+//! this changes no outcome the T800 protocol allows; when no guard is ready, the protocol runs.
 
 use cranelift_codegen::ir::{InstBuilder, Value, condcodes::IntCC, types};
 use cranelift_frontend::Switch;
 use occ_grammar::ast::{Alt, AltKind, Alternative, Expr, ProcessKind, Replicator, Span};
+
+use occ_runtime::abi::{NOT_PROCESS, tag};
 
 use super::{Res, Storage, Tr, mem};
 
@@ -54,6 +62,15 @@ fn flatten<'a>(alt: &'a Alt, prefix: &[Level<'a>], out: &mut Vec<Group<'a>>) {
     }
 }
 
+/// True when every guard is an unconditional input on a channel, outside any replication: the
+/// ALTs the fast path serves.
+fn plain_inputs(groups: &[Group<'_>]) -> bool {
+    groups.iter().all(|g| {
+        matches!(g, Group::Single(a)
+            if cond_of(a).is_none() && matches!(guard_of(a), Some(Guard::Chan(_))))
+    })
+}
+
 fn cond_of(a: &Alternative) -> Option<&Expr> {
     match &a.kind {
         AltKind::Guarded { cond, .. } | AltKind::CaseInput { cond, .. } => cond.as_ref(),
@@ -95,6 +112,14 @@ impl Tr<'_, '_> {
         });
         // Declarations before single alternatives scope over the whole ALT.
         self.alt_decls(alt)?;
+        let selected = self.b.create_block();
+        self.b.append_block_param(selected, types::I64);
+        if plain_inputs(&groups) {
+            let protocol = self.b.create_block();
+            self.poll_ready(&groups, alt.pri, selected)?;
+            self.b.ins().jump(protocol, &[]);
+            self.b.switch_to_block(protocol);
+        }
         let start = if timed { "rt_talt" } else { "rt_alt" };
         self.call_rt(start, &[self.node, self.ws]);
         self.no_poll += 1;
@@ -108,7 +133,84 @@ impl Tr<'_, '_> {
         self.disable_all(&groups, &saved, alt.pri, span)?;
         self.no_poll -= 1;
         let sel = self.call_rt("rt_altend", &[self.node, self.ws]);
+        self.b.ins().jump(selected, &[sel.into()]);
+        self.b.switch_to_block(selected);
+        let sel = self.b.block_params(selected)[0];
         self.run_selected(&groups, &saved, sel, span)
+    }
+
+    /// The fast path: reads each guard's channel word in disabling order and jumps to
+    /// `selected` with the first ready guard's branch number; falls through when none is ready.
+    fn poll_ready(
+        &mut self,
+        groups: &[Group<'_>],
+        pri: bool,
+        selected: cranelift_codegen::ir::Block,
+    ) -> Res<()> {
+        self.in_order(groups.len(), pri, |tr, gi| {
+            let (Group::Single(a) | Group::Repl(_, a)) = &groups[gi];
+            let Some(Guard::Chan(c)) = guard_of(a) else {
+                return Err(tr
+                    .cx
+                    .internal(a.span, "poll of a guard that is not an input"));
+            };
+            let ch = tr.place(c)?.addr;
+            let w = tr.b.ins().load(types::I64, mem(), ch, 0);
+            let special = tr.b.ins().band_imm_u(w, tag::EXTERNAL | tag::ALT);
+            let plain = tr.b.ins().icmp_imm_u(IntCC::Equal, special, 0);
+            let waiting = tr.b.ins().icmp_imm_u(IntCC::NotEqual, w, NOT_PROCESS);
+            let ready = tr.b.ins().band(plain, waiting);
+            let branch = tr.iconst((gi as i64) << 32);
+            let next = tr.b.create_block();
+            tr.b.ins()
+                .brif(ready, selected, &[branch.into()], next, &[]);
+            tr.b.switch_to_block(next);
+            Ok(())
+        })
+    }
+
+    /// Emits `emit(gi)` for each of `n` guard groups in disabling order: textual for a PRI ALT
+    /// (or a single group), otherwise starting from a per-site counter that advances at every
+    /// execution, so that no guard is favoured for ever.
+    fn in_order(
+        &mut self,
+        n: usize,
+        pri: bool,
+        mut emit: impl FnMut(&mut Self, usize) -> Res<()>,
+    ) -> Res<()> {
+        if pri || n < 2 {
+            return (0..n).try_for_each(|gi| emit(self, gi));
+        }
+        let cell = self.cx.intern(vec![0u8; 8]);
+        let cell = self.iconst(cell);
+        let c = self.b.ins().load(types::I64, mem(), cell, 0);
+        let c1 = self.b.ins().iadd_imm_s(c, 1);
+        self.b.ins().store(mem(), c1, cell, 0);
+        let first = self.b.ins().urem_imm_s(c, n as i64);
+        let off = self.frame.alloc(8);
+        let a = self.local_addr(off);
+        self.b.ins().store(mem(), first, a, 0);
+        for pass in 0..2 {
+            for gi in 0..n {
+                let a = self.local_addr(off);
+                let first = self.b.ins().load(types::I64, mem(), a, 0);
+                let cc = if pass == 0 {
+                    IntCC::SignedLessThanOrEqual
+                } else {
+                    IntCC::SignedGreaterThan
+                };
+                let gv = self.iconst(gi as i64);
+                let take = self.b.ins().icmp(cc, first, gv);
+                let yes = self.b.create_block();
+                let next = self.b.create_block();
+                self.b.ins().brif(take, yes, &[], next, &[]);
+                self.b.switch_to_block(yes);
+                emit(self, gi)?;
+                self.b.ins().jump(next, &[]);
+                self.b.switch_to_block(next);
+            }
+        }
+        Ok(())
     }
 
     /// Lowers the declarations before the alternatives of an unreplicated ALT (and of the ALTs
@@ -135,44 +237,9 @@ impl Tr<'_, '_> {
         pri: bool,
         span: Span,
     ) -> Res<()> {
-        if pri || groups.len() < 2 {
-            for (gi, g) in groups.iter().enumerate() {
-                self.group(g, gi, Some(&saved[gi]), span)?;
-            }
-            return Ok(());
-        }
-        // Fairness: start disabling at a rotating group.
-        let cell = self.cx.intern(vec![0u8; 8]);
-        let cell = self.iconst(cell);
-        let c = self.b.ins().load(types::I64, mem(), cell, 0);
-        let c1 = self.b.ins().iadd_imm_s(c, 1);
-        self.b.ins().store(mem(), c1, cell, 0);
-        let n = groups.len() as i64;
-        let first = self.b.ins().urem_imm_s(c, n);
-        let off = self.frame.alloc(8);
-        let a = self.local_addr(off);
-        self.b.ins().store(mem(), first, a, 0);
-        for pass in 0..2 {
-            for (gi, g) in groups.iter().enumerate() {
-                let a = self.local_addr(off);
-                let first = self.b.ins().load(types::I64, mem(), a, 0);
-                let cc = if pass == 0 {
-                    IntCC::SignedLessThanOrEqual
-                } else {
-                    IntCC::SignedGreaterThan
-                };
-                let gv = self.iconst(gi as i64);
-                let take = self.b.ins().icmp(cc, first, gv);
-                let yes = self.b.create_block();
-                let next = self.b.create_block();
-                self.b.ins().brif(take, yes, &[], next, &[]);
-                self.b.switch_to_block(yes);
-                self.group(g, gi, Some(&saved[gi]), span)?;
-                self.b.ins().jump(next, &[]);
-                self.b.switch_to_block(next);
-            }
-        }
-        Ok(())
+        self.in_order(groups.len(), pri, |tr, gi| {
+            tr.group(&groups[gi], gi, Some(&saved[gi]), span)
+        })
     }
 
     /// Enables (`save` is `None`) or disables one guard group; group `gi`'s branch number is
