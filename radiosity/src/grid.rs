@@ -89,7 +89,10 @@ impl BoxGrid {
     /// `lo..hi`.
     pub fn query_box(&self, lo: Vec3, hi: Vec3, out: &mut Vec<u32>) {
         out.clear();
-        self.collect_box(lo, hi, out);
+        if !self.collect_box(lo, hi, out) {
+            out.clone_from(&self.all);
+        }
+        out.extend_from_slice(&self.large);
         finish(out);
     }
 
@@ -103,17 +106,21 @@ impl BoxGrid {
         let half = Vec3::splat(0.5 * (q - p).length() / steps as f32 + radius);
         for k in 0..steps {
             let c = p.lerp(q, (k as f32 + 0.5) / steps as f32);
-            self.collect_box(c - half, c + half, out);
+            if !self.collect_box(c - half, c + half, out) {
+                out.clone_from(&self.all);
+                break;
+            }
         }
+        out.extend_from_slice(&self.large);
         finish(out);
     }
 
-    fn collect_box(&self, lo: Vec3, hi: Vec3, out: &mut Vec<u32>) {
+    /// Appends the items of the cells `lo..hi` covers; false (appending nothing) when that is
+    /// too many cells to visit, and the caller must take every item.
+    fn collect_box(&self, lo: Vec3, hi: Vec3, out: &mut Vec<u32>) -> bool {
         let Some((a, b)) = self.span(lo, hi) else {
-            out.extend_from_slice(&self.all);
-            return;
+            return false;
         };
-        out.extend_from_slice(&self.large);
         for z in a.z..=b.z {
             for y in a.y..=b.y {
                 for x in a.x..=b.x {
@@ -123,6 +130,7 @@ impl BoxGrid {
                 }
             }
         }
+        true
     }
 }
 

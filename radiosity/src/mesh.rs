@@ -475,12 +475,13 @@ enum Search {
     Everything,
 }
 
-/// A grid over the elements as they were when it was built, plus the elements added since
-/// (splitting only shrinks an element, and its new halves lie inside the old box, so the grid
-/// stays conservative). It is rebuilt when the added elements grow to a quarter of it.
+/// A grid over the elements, kept up to date as cuts add elements: a new half lies inside the
+/// box of the element it was cut from, and a cut element only shrinks, so every element stays in
+/// (at least) the cells of its own box.
 struct ElementIndex {
     grid: BoxGrid,
-    built: usize,
+    /// Elements `0..inserted` are in the grid.
+    inserted: usize,
     eps: f32,
 }
 
@@ -493,18 +494,19 @@ impl ElementIndex {
             .collect();
         ElementIndex {
             grid: BoxGrid::over(&boxes),
-            built: boxes.len(),
+            inserted: boxes.len(),
             eps,
         }
     }
 
     /// Puts into `out`, in increasing order, every element that may meet segment `(p, q)`.
     fn candidates(&mut self, mesh: &Mesh, p: Vec3, q: Vec3, out: &mut Vec<u32>) {
-        if mesh.elements.len() - self.built > (self.built / 4).max(1024) {
-            *self = ElementIndex::new(mesh, self.eps);
+        for i in self.inserted..mesh.elements.len() {
+            let (lo, hi) = padded_box(&mesh.tri(&mesh.elements[i]), self.eps);
+            self.grid.insert(i as u32, lo, hi);
         }
+        self.inserted = mesh.elements.len();
         self.grid.query_segment(p, q, self.eps, out);
-        out.extend(self.built as u32..mesh.elements.len() as u32);
     }
 }
 

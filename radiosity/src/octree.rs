@@ -17,8 +17,11 @@
 //! - **Glassner** (the comparison): the same step, but every descent starts at the root.
 //!
 //! Invariants:
-//! - every triangle that overlaps a leaf's box is stored in that leaf (conservative, so occlusion
-//!   answers equal a brute-force test of all triangles);
+//! - every triangle that overlaps a leaf's box widened by [`Octree::margin`] is stored in that
+//!   leaf; neighbouring leaves share their face coordinates exactly (both computed from the same
+//!   integer cell), so no point of space lies in no leaf. The margin covers the rounding of the
+//!   walk's cell coordinates, so the leaf a walk is in holds every triangle the ray can meet
+//!   there, and occlusion answers equal a brute-force test of all triangles;
 //! - a node's integer box is `origin .. origin + (1 << (depth - level))` on each axis;
 //! - children of node `n` are `nodes[n.first .. n.first + 8]`, ordered by `x | y << 1 | z << 2`.
 
@@ -45,7 +48,7 @@ const INTERIOR: u32 = u32::MAX;
 pub const VOXEL_TRI_FLOATS: usize = 9;
 
 /// A leaf face on the boundary of the root box has no neighbour.
-const NO_ROPE: u32 = u32::MAX;
+const NO_ROPE: u64 = u64::MAX;
 
 /// How the traversal finds the next voxel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,13 +89,16 @@ pub struct Octree {
     lo: Vec3,
     cell: f32,
     depth: u32,
+    /// How far beyond its box a leaf takes triangles (and its packets' boxes reach): about 16
+    /// ulps of the root's coordinates, more than the rounding of the walk's cell coordinates.
+    margin: f32,
     nodes: Vec<Node>,
     /// The traversal's copy of `nodes`: `[first, count]` only (8 bytes a node, so the whole tree
     /// stays in cache; origins and levels are recomputed from the cell being sought).
     hot: Vec<[u32; 2]>,
     /// For leaf `n`, `ropes[6 n + face]` is the neighbour of equal or greater size across `face`
-    /// (`2 axis + 1` for the face on the high side) as `node << 5 | level`, or [`NO_ROPE`].
-    ropes: Vec<u32>,
+    /// (`2 axis + 1` for the face on the high side) as `node << 8 | level`, or [`NO_ROPE`].
+    ropes: Vec<u64>,
     packets: Vec<TriPacket>,
     ids: Vec<[u32; LANES]>,
     /// `boxes[g]` holds the boxes of `packets[LANES g .. LANES (g + 1)]`.
@@ -131,10 +137,12 @@ impl Octree {
         let size = (hi - lo).max_element().max(1e-20) * 1.001;
         let pad = size * 0.0005;
         let depth = config.max_depth.min(20);
+        let root_lo = lo - Vec3::splat(pad);
         let mut tree = Octree {
-            lo: lo - Vec3::splat(pad),
+            lo: root_lo,
             cell: (size + 2.0 * pad) / (1u32 << depth) as f32,
             depth,
+            margin: 1e-6 * (root_lo.abs().max_element() + size + 2.0 * pad),
             nodes: vec![Node {
                 origin: UVec3::ZERO,
                 level: 0,
@@ -158,14 +166,16 @@ impl Octree {
 
     /// Returns the world-space box of node `n`.
     fn node_box(&self, n: &Node) -> (Vec3, Vec3) {
-        let size = (1u32 << (self.depth - n.level)) as f32 * self.cell;
-        let lo = self.lo + n.origin.as_vec3() * self.cell;
-        (lo, lo + Vec3::splat(size))
+        let face = |cell: UVec3| self.lo + cell.as_vec3() * self.cell;
+        (
+            face(n.origin),
+            face(n.origin + (1u32 << (self.depth - n.level))),
+        )
     }
 
     /// Samet's neighbour of leaf `n` across `face` (see [`Octree::ropes`]): the deepest node no
     /// deeper than the leaf whose box holds the cell just across the face.
-    fn rope(&self, n: usize, face: usize) -> u32 {
+    fn rope(&self, n: usize, face: usize) -> u64 {
         let node = self.nodes[n];
         if node.count == INTERIOR {
             return NO_ROPE;
@@ -186,7 +196,7 @@ impl Octree {
         while level < node.level && self.nodes[m as usize].count == INTERIOR {
             (level, m) = self.child_towards(&mut path, level, m, q);
         }
-        (m << 5) | level
+        ((m as u64) << 8) | level as u64
     }
 
     /// Fills node `index` with `members` (split or leaf).
@@ -204,6 +214,8 @@ impl Octree {
                         count: 0,
                     };
                     let (blo, bhi) = self.node_box(&child);
+                    let m = Vec3::splat(self.margin);
+                    let (blo, bhi) = (blo - m, bhi + m);
                     let inside = members
                         .iter()
                         .copied()
@@ -235,11 +247,13 @@ impl Octree {
         }
         self.nodes[index].first = self.packets.len() as u32;
         self.nodes[index].count = members.len().div_ceil(LANES) as u32;
-        // Each packet's box is clipped to the leaf (a hit outside it is found in the leaf that
-        // holds it) and widened by a few ulps of the coordinates, so that rounding never drops
-        // a hit; it stays well under the offset that lifts ray origins off their surfaces.
+        // Each packet's box is clipped to the leaf widened by the margin (a hit outside it is
+        // found in the leaf that holds it) and widened by the margin again, so that the walk's
+        // rounding never drops a hit; it stays under the offset that lifts ray origins off
+        // their surfaces (1e-3 mm in the Cornell box, where the margin is 5.6e-4 mm).
         let (lo, hi) = self.node_box(&node);
-        let margin = 1e-6 * (lo.abs().max(hi.abs()).max_element() + (hi - lo).max_element());
+        let margin = self.margin;
+        let (lo, hi) = (lo - Vec3::splat(margin), hi + Vec3::splat(margin));
         for chunk in members.chunks(LANES) {
             let packet = TriPacket::pack(chunk.iter().map(|&i| &tris[i as usize]));
             let (blo, bhi) = packet.bounds(chunk.len());
@@ -482,6 +496,8 @@ const GLASSNER: u8 = 2;
 /// is a look-up in `path` rather than a chain of parent links through memory.
 #[derive(Clone, Copy)]
 struct Walker {
+    /// Where the ray enters the tree (its parameter) and that point in cell units.
+    t0: f32,
     oc: Vec3A,
     dc: Vec3A,
     inv_c: Vec3A,
@@ -524,10 +540,14 @@ impl Walker {
     ) -> Option<Walker> {
         let inv = Vec3::ONE / d;
         let t0 = tree.enter(o, inv, tmin, tmax)?;
+        // The walk starts from the point where the ray enters, so that cell coordinates are
+        // small numbers even for an origin far outside the tree.
+        let start = Vec3A::from(o) + Vec3A::from(d) * t0;
         let d = Vec3A::from(d);
         let forward = d.cmpgt(Vec3A::ZERO);
         let mut w = Walker {
-            oc: ((o - tree.lo) / tree.cell).into(),
+            oc: (start - Vec3A::from(tree.lo)) / tree.cell,
+            t0,
             dc: d / tree.cell,
             inv_c: Vec3A::from(inv) * tree.cell,
             forward01: Vec3A::select(forward, Vec3A::ONE, Vec3A::ZERO),
@@ -543,15 +563,16 @@ impl Walker {
             t_exit: 0.0,
             axis: 0,
         };
-        let q = w.cell_at(t0).min(Vec3A::splat(w.cells - 1.0));
+        let q = w.cell_at(t0, Vec3A::ZERO, Vec3A::splat(w.cells - 1.0));
         w.enter(tree, path, 0, 0, q);
         Some(w)
     }
 
-    /// The cell holding the ray's point at `t` (truncation is floor: clamped non-negative).
+    /// The cell holding the ray's point at `t`, clamped to the cells `lo ..= hi` (before the
+    /// truncation, so nothing overflows; truncation is floor, as `lo` is not negative).
     #[inline(always)]
-    fn cell_at(&self, t: f32) -> Vec3A {
-        trunc((self.oc + self.dc * t).max(Vec3A::ZERO))
+    fn cell_at(&self, t: f32, lo: Vec3A, hi: Vec3A) -> Vec3A {
+        trunc((self.oc + self.dc * (t - self.t0)).clamp(lo, hi))
     }
 
     /// Descends from node `n` at `level` to the leaf holding cell `q` and computes where the
@@ -569,11 +590,9 @@ impl Walker {
             ((far - self.oc) * self.inv_c).max(Vec3A::ZERO),
             Vec3A::INFINITY,
         );
-        self.t_exit = t.min_element();
-        self.axis = t
-            .cmpeq(Vec3A::splat(self.t_exit))
-            .bitmask()
-            .trailing_zeros() as usize;
+        let local = t.min_element();
+        self.t_exit = self.t0 + local;
+        self.axis = t.cmpeq(Vec3A::splat(local)).bitmask().trailing_zeros() as usize;
     }
 
     /// Visits the leaves from here on; `visit([first packet, packet count], t_exit)` returns
@@ -603,9 +622,7 @@ impl Walker {
             self.origin + self.size,
             self.origin - Vec3A::ONE,
         );
-        let inside = self
-            .cell_at(self.t_exit)
-            .clamp(self.origin, self.origin + (self.size - 1.0));
+        let inside = self.cell_at(self.t_exit, self.origin, self.origin + (self.size - 1.0));
         let next = Vec3A::select(EXIT[axis], across, inside);
         if (next.cmplt(Vec3A::ZERO) | next.cmpge(Vec3A::splat(self.cells))).any() {
             return false;
@@ -618,7 +635,7 @@ impl Walker {
             ROPES => {
                 let face = 2 * axis + ((self.forward.bitmask() >> axis) & 1) as usize;
                 let rope = tree.ropes[6 * self.node as usize + face];
-                (rope & 31, rope >> 5)
+                ((rope & 255) as u32, (rope >> 8) as u32)
             }
             _ => (0, 0),
         };
@@ -682,4 +699,94 @@ pub fn occluded_brute_force(tris: &[Tri], o: Vec3, d: Vec3, tmin: f32, tmax: f32
         ray_triangle(o, d, t.v[0], t.v[1] - t.v[0], t.v[2] - t.v[0])
             .is_some_and(|h| h > tmin && h < tmax)
     })
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+
+    const MODES: [Traversal; 3] = [Traversal::Samet, Traversal::Ropes, Traversal::Glassner];
+
+    /// A small triangle at `c` (to set the root's bounds).
+    fn speck(c: Vec3) -> Tri {
+        Tri::new(c, c + Vec3::X * 0.01, c + Vec3::Y * 0.01)
+    }
+
+    /// A wall facing x at `x`, 0.02 wide around `(y, z)`.
+    fn wall(x: f32, y: f32, z: f32) -> Tri {
+        Tri::new(
+            Vec3::new(x, y - 0.01, z - 0.01),
+            Vec3::new(x, y + 0.01, z - 0.01),
+            Vec3::new(x, y, z + 0.01),
+        )
+    }
+
+    #[test]
+    fn walls_on_and_beside_cell_faces_are_found_by_rays_starting_just_before_them() {
+        // A root of 2000 units at depth 12, and walls on and a few ulps either side of faces
+        // between two finest cells far from 0. Specks force the walls' cells to split at every
+        // level down to those two cells (a staircase: at each level, one speck in the wall's
+        // cell but not in the wall's half of it). There the rounding of face coordinates and
+        // of the walk's cell coordinates bites; the rays start 4e-5 before their wall.
+        let mut tris = vec![speck(Vec3::splat(-1000.0)), speck(Vec3::splat(1000.0))];
+        let config = OctreeConfig {
+            max_leaf: 1,
+            max_depth: 12,
+        };
+        let probe = Octree::build(&tris, config);
+        let (lo, cell) = (probe.lo, probe.cell);
+        let mut rays = Vec::new();
+        for j in 0..12 {
+            let xf = lo.x + (2289 + 2 * j) as f32 * cell;
+            for ulps in -6i32..=6 {
+                let x = f32::from_bits((xf.to_bits() as i32 + ulps) as u32);
+                let (y, z) = (-900.0 + 150.0 * j as f32 + 9.0 * ulps as f32, 26.686157);
+                tris.push(wall(x, y, z));
+                for level in 0..11 {
+                    let size = cell * (1u32 << (12 - level)) as f32;
+                    let y0 = lo.y + ((y - lo.y) / size).floor() * size;
+                    let other_half = if y - y0 < 0.5 * size { 0.75 } else { 0.25 };
+                    tris.push(speck(Vec3::new(xf + 0.5 * cell, y0 + other_half * size, z)));
+                }
+                tris.push(speck(Vec3::new(xf + 0.5 * cell, y, z)));
+                rays.push((Vec3::new(x - 4e-5, y, z), Vec3::X));
+            }
+        }
+        let tree = Octree::build(&tris, config);
+        assert_eq!((tree.lo, tree.cell), (lo, cell));
+        assert_eq!(tree.stats().max_level, 12);
+        for (o, d) in rays {
+            let expected = occluded_brute_force(&tris, o, d, 0.0, 1e-3);
+            assert!(expected, "the ray at {o} meets its wall");
+            for mode in MODES {
+                assert_eq!(
+                    tree.occluded(o, d, 0.0, 1e-3, mode),
+                    expected,
+                    "{mode:?} {o}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn rays_from_far_outside_the_tree_find_what_they_meet() {
+        let tris = vec![
+            speck(Vec3::splat(-1.0)),
+            speck(Vec3::splat(1.0)),
+            wall(0.25, 0.3, 0.3),
+        ];
+        let tree = Octree::build(&tris, OctreeConfig::default());
+        for far in [1e3f32, 1e5, 1e7] {
+            let o = Vec3::new(-far, 0.3, 0.3);
+            let d = Vec3::X * (2.0 * far);
+            let expected = occluded_brute_force(&tris, o, d, 0.0, 1.0);
+            for mode in MODES {
+                assert_eq!(
+                    tree.occluded(o, d, 0.0, 1.0, mode),
+                    expected,
+                    "{mode:?} {far}"
+                );
+            }
+        }
+    }
 }

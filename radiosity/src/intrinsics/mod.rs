@@ -449,8 +449,10 @@ mod test;
 /// gives them). `blocked[k]` becomes TRUE when ray `k` meets a triangle and is left alone
 /// otherwise, so the answers of the voxels a ray crosses accumulate; `count` is the number of
 /// rays newly blocked, or -1 (nothing written) when `voxel` is not a multiple of 9 floats,
-/// `rays` not a multiple of 8, or `blocked` shorter than the number of rays. The test is the
-/// octree's own, so the verdict over all the voxels a ray crosses is the octree's verdict.
+/// `rays` not a multiple of 8, or `blocked` shorter than the number of rays. The triangle test
+/// is the octree's packet test, but not clipped to the voxel: a voxel may report a hit that lies
+/// in a neighbouring voxel. So the verdict accumulated over all the voxels a ray crosses is the
+/// octree's verdict, while one voxel's verdict alone may be more than what lies inside it.
 ///
 /// # Safety
 /// The arrays are valid for their lengths and `count` for one word (the occam ABI).
