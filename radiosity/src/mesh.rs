@@ -115,9 +115,9 @@ impl Mesh {
         let eps = 1e-5 * scene.diagonal().max(1e-30);
         let mut mesh = Mesh::welded(scene, eps);
         mesh.stats.input_triangles = mesh.elements.len();
-        mesh.stats.t_junction_splits = mesh.split_t_junctions(eps);
+        mesh.stats.t_junction_splits = mesh.split_t_junctions(eps, search);
         mesh.stats.d0_splits = mesh.split_d0(eps, search);
-        mesh.stats.t_junction_splits += mesh.split_t_junctions(eps);
+        mesh.stats.t_junction_splits += mesh.split_t_junctions(eps, search);
         mesh.subdivide(config.patch_size.max(eps * 10.0));
         mesh.patches = mesh.elements.iter().map(|e| mesh.tri(e)).collect();
         mesh.patch_object = mesh.elements.iter().map(|e| e.object).collect();
@@ -276,10 +276,10 @@ impl Mesh {
     /// Splits coplanar triangles' edges at vertices lying inside them (T-junctions). Each sweep
     /// splits every edge at every vertex found on it; the edges those splits create are looked
     /// at by the next sweep.
-    fn split_t_junctions(&mut self, eps: f32) -> usize {
+    fn split_t_junctions(&mut self, eps: f32, search: Search) -> usize {
         let mut splits = 0;
         for _sweep in 0..64 {
-            let found = self.t_junctions(eps);
+            let found = self.t_junctions(eps, search);
             if found.is_empty() {
                 break;
             }
@@ -299,7 +299,7 @@ impl Mesh {
 
     /// Returns each edge `(a, b)` (in edge order) with the vertices of the same surface lying
     /// inside it, ordered from `a` to `b`.
-    fn t_junctions(&self, eps: f32) -> Vec<((u32, u32), Vec<u32>)> {
+    fn t_junctions(&self, eps: f32, search: Search) -> Vec<((u32, u32), Vec<u32>)> {
         let edges = self.edge_list();
         let mut lengths: Vec<f32> = edges
             .iter()
@@ -323,7 +323,10 @@ impl Mesh {
             let (pa, pb) = (self.pos(a), self.pos(b));
             let n = self.vertices[a as usize].normal;
             let ab = pb - pa;
-            grid.query_segment(pa, pb, eps, &mut near);
+            match search {
+                Search::Grid => grid.query_segment(pa, pb, eps, &mut near),
+                Search::Everything => near = (0..self.vertices.len() as u32).collect(),
+            }
             let mut on_edge: Vec<(f32, u32)> = near
                 .iter()
                 .copied()
@@ -595,25 +598,9 @@ mod tests {
         }
     }
 
-    #[test]
-    fn grid_search_meshes_exactly_as_scanning_everything() {
-        let cornell = cornell::load(true).expect("scene");
-        let config = MeshConfig {
-            patch_size: 1e6,
-            element_size: 1e6,
-        };
-        let fast = Mesh::build(&cornell, config, Search::Grid);
-        let slow = Mesh::build(&cornell, config, Search::Everything);
-        assert!(fast.stats.d0_splits > 10, "{:?}", fast.stats);
-        assert_eq!(fast.stats, slow.stats);
-        assert_eq!(fast.vertices, slow.vertices);
-        assert_eq!(fast.elements, slow.elements);
-    }
-
-    #[test]
-    fn every_t_junction_along_a_long_edge_is_split() {
-        // A 100 x 10 strip (two triangles) under a strip cut into 100 columns: 99 vertices lie
-        // inside the first strip's top edge. All must be split, leaving a conforming mesh.
+    /// A 100 x 10 strip (two triangles) under a strip cut into 100 columns: 99 vertices lie
+    /// inside the first strip's top edge.
+    fn strip_scene() -> Scene {
         let mut tris = vec![
             [(0.0, 0.0), (0.0, 10.0), (100.0, 10.0)],
             [(0.0, 0.0), (100.0, 10.0), (100.0, 0.0)],
@@ -623,8 +610,34 @@ mod tests {
             tris.push([(x0, 10.0), (x0, 20.0), (x1, 20.0)]);
             tris.push([(x0, 10.0), (x1, 20.0), (x1, 10.0)]);
         }
+        flat_scene(&tris)
+    }
+
+    #[test]
+    fn grid_search_meshes_exactly_as_scanning_everything() {
+        let config = MeshConfig {
+            patch_size: 1e6,
+            element_size: 1e6,
+        };
+        for scene in [cornell::load(true).expect("scene"), strip_scene()] {
+            let fast = Mesh::build(&scene, config, Search::Grid);
+            let slow = Mesh::build(&scene, config, Search::Everything);
+            assert!(
+                fast.stats.d0_splits + fast.stats.t_junction_splits > 10,
+                "{:?}",
+                fast.stats
+            );
+            assert_eq!(fast.stats, slow.stats);
+            assert_eq!(fast.vertices, slow.vertices);
+            assert_eq!(fast.elements, slow.elements);
+        }
+    }
+
+    #[test]
+    fn every_t_junction_along_a_long_edge_is_split() {
+        // All 99 T-junctions must be split, leaving a conforming mesh.
         let mesh = Mesh::from_scene(
-            &flat_scene(&tris),
+            &strip_scene(),
             MeshConfig {
                 patch_size: 1e3,
                 element_size: 1e3,
