@@ -53,11 +53,34 @@ pub struct MeshConfig {
     pub element_size: f32,
 }
 
+impl MeshConfig {
+    /// About how many elements meshing `scene` with these sizes makes: each triangle's area over
+    /// that of an equilateral element of the element size, or its edge count along the longest
+    /// edge for slivers, whichever is more (longest-edge bisection halves edges until they are
+    /// short enough). Callers use it to refuse sizes that would not fit in memory.
+    pub fn estimated_elements(&self, scene: &Scene) -> f64 {
+        let e = f64::from(self.element_size.min(self.patch_size)).max(1e-30);
+        scene
+            .triangles
+            .iter()
+            .map(|t| {
+                let by_area = f64::from(t.tri.area()) / (0.433 * e * e);
+                let by_edge = f64::from(t.tri.longest_edge().0) / e;
+                by_area.max(by_edge).max(1.0)
+            })
+            .sum()
+    }
+}
+
 /// Counts of what meshing did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct MeshStats {
     /// Triangles after welding (the scene's).
     pub input_triangles: usize,
+    /// Scene triangles dropped because welding merged two of their corners: features smaller
+    /// than the weld distance (1e-5 of the scene's diagonal), as in a scene that spans many
+    /// orders of magnitude.
+    pub collapsed: usize,
     /// Edge splits at T-junctions.
     pub t_junction_splits: usize,
     /// Edge splits along intersection / abutting lines between surfaces.
@@ -165,6 +188,10 @@ impl Mesh {
                     mesh.vertices.len() as u32 - 1
                 })
             });
+            if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
+                mesh.stats.collapsed += 1;
+                continue;
+            }
             mesh.push_element(Element {
                 v,
                 object: st.object,
@@ -650,6 +677,26 @@ mod tests {
             let outer = mid.x == 0.0 || mid.x == 100.0 || mid.z == 0.0 || mid.z == 20.0;
             assert_eq!(n, if outer { 1 } else { 2 }, "edge {a}-{b} at {mid}");
         }
+    }
+
+    #[test]
+    fn triangles_below_the_weld_distance_are_left_out_not_meshed_forever() {
+        // A scene 1e8 across with a triangle 0.5 across: welding (1e-5 of the diagonal) merges
+        // its corners. Meshing it would split a zero-length edge without end; it is counted
+        // and left out instead.
+        let scene = flat_scene(&[
+            [(0.0, 0.0), (0.0, 1e8), (1e8, 0.0)],
+            [(1.0, 1.0), (1.0, 1.5), (1.5, 1.0)],
+        ]);
+        let mesh = Mesh::from_scene(
+            &scene,
+            MeshConfig {
+                patch_size: 5e7,
+                element_size: 5e7,
+            },
+        );
+        assert_eq!(mesh.stats.collapsed, 1);
+        assert!(mesh.elements.len() < 100, "{}", mesh.elements.len());
     }
 
     #[test]

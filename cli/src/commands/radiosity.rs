@@ -76,6 +76,11 @@ pub struct Args {
     pub exposure: f32,
 }
 
+/// Most elements `occ radiosity` will mesh a scene into (a few hundred bytes each, with their
+/// sample points and octree references): beyond it the sizes are refused rather than exhausting
+/// memory.
+const MAX_ELEMENTS: f64 = 2e7;
+
 /// Runs `occ radiosity`.
 pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     check_args(&args)?;
@@ -88,7 +93,23 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         patch_size: args.patch_size.unwrap_or(diag / 4.0),
         element_size: args.element_size.unwrap_or(diag / 20.0),
     };
+    let elements = mesh_config.estimated_elements(&scene);
+    anyhow::ensure!(
+        elements <= MAX_ELEMENTS,
+        "{name}: meshing with patch size {} and element size {} would make about {elements:.2e} \
+         elements (more than {MAX_ELEMENTS:.0e}); give a larger --patch-size / --element-size",
+        mesh_config.patch_size,
+        mesh_config.element_size
+    );
     let mesh = Mesh::from_scene(&scene, mesh_config);
+    if mesh.stats.collapsed > 0 {
+        eprintln!(
+            "warning: {name}: {} triangles are smaller than the weld distance ({:.3e}, 1e-5 of \
+             the scene's diagonal) and were left out",
+            mesh.stats.collapsed,
+            1e-5 * diag
+        );
+    }
     let mesh_time = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
     let mut solver = Solver::new(
