@@ -198,7 +198,36 @@ impl Mesh {
                 patch: 0,
             });
         }
+        if mesh.stats.collapsed > 0 {
+            mesh.drop_unused_vertices();
+        }
         mesh
+    }
+
+    /// Removes the vertices no element uses (left by triangles that welding collapsed) and
+    /// renumbers the rest in order.
+    fn drop_unused_vertices(&mut self) {
+        let mut used = vec![false; self.vertices.len()];
+        for e in &self.elements {
+            for v in e.v {
+                used[v as usize] = true;
+            }
+        }
+        let mut new_index = vec![u32::MAX; self.vertices.len()];
+        let mut kept = Vec::new();
+        for (i, v) in self.vertices.iter().enumerate() {
+            if used[i] {
+                new_index[i] = kept.len() as u32;
+                kept.push(*v);
+            }
+        }
+        self.vertices = kept;
+        let elements = std::mem::take(&mut self.elements);
+        self.edges.clear();
+        for mut e in elements {
+            e.v = e.v.map(|v| new_index[v as usize]);
+            self.push_element(e);
+        }
     }
 
     fn push_element(&mut self, e: Element) -> u32 {
@@ -697,6 +726,13 @@ mod tests {
         );
         assert_eq!(mesh.stats.collapsed, 1);
         assert!(mesh.elements.len() < 100, "{}", mesh.elements.len());
+        // The collapsed triangle leaves no sample point behind.
+        let mut used = vec![false; mesh.vertices.len()];
+        mesh.elements
+            .iter()
+            .flat_map(|e| e.v)
+            .for_each(|v| used[v as usize] = true);
+        assert!(used.iter().all(|&u| u));
     }
 
     #[test]
