@@ -619,18 +619,23 @@ mod tests {
     #[test]
     fn cornell_floor_is_cut_along_the_block_footprints() {
         let scene = cornell::load(true).expect("scene");
-        let mesh = Mesh::from_scene(
-            &scene,
-            MeshConfig {
-                patch_size: 1000.0,
-                element_size: 1000.0,
-            },
-        );
+        let mesh = meshed(&scene, 1000.0);
         assert!(mesh.stats.d0_splits > 0, "{:?}", mesh.stats);
         // No floor element straddles the line of the short block's front face (z from 65 to 114).
         let (p, q) = (Vec3::new(130.0, 0.0, 65.0), Vec3::new(290.0, 0.0, 114.0));
         let all: Vec<u32> = (0..mesh.elements.len() as u32).collect();
         assert!(mesh.find_straddler(&all, p, q, Vec3::Y, 1e-3).is_none());
+    }
+
+    /// `scene` meshed with patches and elements of at most `size`.
+    fn meshed(scene: &Scene, size: f32) -> Mesh {
+        Mesh::from_scene(
+            scene,
+            MeshConfig {
+                patch_size: size,
+                element_size: size,
+            },
+        )
     }
 
     /// A scene of one object from triangles in the plane y = 0 given by (x, z) corners.
@@ -692,13 +697,7 @@ mod tests {
     #[test]
     fn every_t_junction_along_a_long_edge_is_split() {
         // All 99 T-junctions must be split, leaving a conforming mesh.
-        let mesh = Mesh::from_scene(
-            &strip_scene(),
-            MeshConfig {
-                patch_size: 1e3,
-                element_size: 1e3,
-            },
-        );
+        let mesh = meshed(&strip_scene(), 1e3);
         assert_eq!(mesh.stats.t_junction_splits, 99);
         for (a, b) in mesh.edge_list() {
             let n = mesh.elements_on_edge(a, b).len();
@@ -717,13 +716,7 @@ mod tests {
             [(0.0, 0.0), (0.0, 1e8), (1e8, 0.0)],
             [(1.0, 1.0), (1.0, 1.5), (1.5, 1.0)],
         ]);
-        let mesh = Mesh::from_scene(
-            &scene,
-            MeshConfig {
-                patch_size: 5e7,
-                element_size: 5e7,
-            },
-        );
+        let mesh = meshed(&scene, 5e7);
         assert_eq!(mesh.stats.collapsed, 1);
         assert!(mesh.elements.len() < 100, "{}", mesh.elements.len());
         // The collapsed triangle leaves no sample point behind.
@@ -745,13 +738,7 @@ mod tests {
             [(2.0, 2.0), (2.0, 0.0), (1.0, 1.0)],
         ];
         let scene = flat_scene(&tris);
-        let mesh = Mesh::from_scene(
-            &scene,
-            MeshConfig {
-                patch_size: 10.0,
-                element_size: 10.0,
-            },
-        );
+        let mesh = meshed(&scene, 10.0);
         assert_eq!(mesh.stats.t_junction_splits, 1);
         assert_eq!(mesh.elements.len(), 4);
         assert_eq!(mesh.vertices.len(), 5);
