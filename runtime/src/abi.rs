@@ -129,6 +129,17 @@ impl Status {
 /// Byte offset, from the `node` pointer, of the `u32` timeslice/preemption flag.
 pub const YIELD_FLAG_OFFSET: i32 = 0;
 
+/// Byte offsets into the node that compiled code's inline channel fast path reads and writes
+/// (see `rt_preempt`): the running priority (a word), the two run queues (`[front, back]` word
+/// pairs, high priority first) and the communications counter (a `u64`).
+pub const NODE_CUR_PRI_OFFSET: i32 = std::mem::offset_of!(Node, cur_pri) as i32;
+/// See [`NODE_CUR_PRI_OFFSET`].
+pub const NODE_QUEUES_OFFSET: i32 = std::mem::offset_of!(Node, queues) as i32;
+/// See [`NODE_CUR_PRI_OFFSET`].
+pub const NODE_COMMUNICATIONS_OFFSET: i32 = (std::mem::offset_of!(Node, stats)
+    + std::mem::offset_of!(crate::stats::Stats, communications))
+    as i32;
+
 /// Word offsets, from Wptr, of the runtime's slots in every workspace.
 ///
 /// Compatible in spirit with KRoC CCSP (`ccsp_consts.h`): Iptr -1, Link -2, Pointer/State -4,
@@ -295,7 +306,7 @@ use crate::alt::{
     rt_alt, rt_altend, rt_altwt, rt_disc, rt_diss, rt_dist, rt_enbc, rt_enbs, rt_enbt, rt_talt,
     rt_taltwt,
 };
-use crate::chan::{rt_in, rt_out};
+use crate::chan::{rt_in, rt_out, rt_preempt};
 use crate::error::rt_error;
 use crate::par::{rt_endp, rt_par_wait, rt_startp, rt_startp_pri, rt_stopp};
 use crate::sched::{rt_reschedule, rt_timeslice};
@@ -304,7 +315,8 @@ use crate::timer::{rt_timer_read, rt_tin};
 /// Every runtime entry point, shared by codegen (imports) and the runtime (definitions).
 ///
 /// Parameter names by entry (all start with `node`, and `ws` is the calling frame):
-/// - `rt_in(node, ws, chan, data, len) -> Status`, `rt_out(node, ws, chan, data, len) -> Status`
+/// - `rt_in(node, ws, chan, data, len) -> Status`, `rt_out(node, ws, chan, data, len) -> Status`,
+///   `rt_preempt(node, ws) -> Status`
 /// - `rt_startp(node, ws, child, code, entry)`, `rt_startp_pri(node, ws, child, code, entry, pri)`,
 ///   `rt_endp(node, ws, join)`, `rt_par_wait(node, ws, join)`, `rt_stopp(node, ws)`
 /// - `rt_timeslice(node, ws)`, `rt_reschedule(node, ws)`
@@ -319,6 +331,7 @@ use crate::timer::{rt_timer_read, rt_tin};
 pub static ABI_TABLE: &[AbiEntry] = &[
     entry!(rt_in, true, [Ptr, Ptr, Ptr, Ptr, W], Some(St)),
     entry!(rt_out, true, [Ptr, Ptr, Ptr, Ptr, W], Some(St)),
+    entry!(rt_preempt, true, [Ptr, Ptr], Some(St)),
     entry!(rt_startp, true, [Ptr, Ptr, Ptr, Ptr, W], Some(St)),
     entry!(rt_startp_pri, true, [Ptr, Ptr, Ptr, Ptr, W, W], Some(St)),
     entry!(rt_endp, true, [Ptr, Ptr, Ptr], Some(St)),

@@ -151,6 +151,19 @@ pub unsafe extern "C" fn rt_out(
     }
 }
 
+/// What `rt_in`/`rt_out` do after completing a communication, for compiled code that completed
+/// one inline (copied the data, emptied the channel word, counted it and put the partner, of
+/// the running priority, at the back of its queue): a low-priority process gives way to a ready
+/// high-priority one. Blocking point.
+///
+/// # Safety
+/// `node` is the running node, `ws` the calling frame (after-op index in `IPTR`).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn rt_preempt(node: *mut Node, ws: Wptr) -> Status {
+    // SAFETY: caller contract.
+    unsafe { (*node).continue_or_preempt(ws) }
+}
+
 /// The second party's half of a communication: copy, empty the channel, requeue the first party
 /// (`w`) at the back of its queue, and carry on unless preempted.
 ///

@@ -7,6 +7,10 @@ use cranelift_frontend::Switch;
 use occ_compiler::types::{ChanProtocol, ProtocolItem, ProtocolKind, Type};
 use occ_grammar::ast::{Expr, ExprKind, IoItem, Span, Variant};
 use occ_runtime::ErrorKind;
+use occ_runtime::abi::{
+    NODE_COMMUNICATIONS_OFFSET, NODE_CUR_PRI_OFFSET, NODE_QUEUES_OFFSET, NOT_PROCESS, priority,
+    slot, tag,
+};
 
 use super::{Res, Tr, mem};
 use crate::layout::{is_scalar, size_of};
@@ -86,8 +90,124 @@ impl Tr<'_, '_> {
     fn send(&mut self, chan: &Expr, off: i32, len: i64, span: Span) -> Res<()> {
         let c = self.chan_addr(chan)?;
         let a = self.local_addr(off);
+        self.communicate(true, c, a, len, span)
+    }
+
+    /// One communication of `len` bytes at `data` on channel word `chan`.
+    ///
+    /// Messages of 1, 4 or 8 bytes take an inline fast path when the partner is already waiting
+    /// in the channel word as a plain process of the running priority: copy straight to or from
+    /// its `POINTER`, empty the word, count the communication, put the partner at the back of
+    /// its run queue and carry on (through `rt_preempt` when a low-priority process must give
+    /// way), exactly what `rt_in`/`rt_out` do for this case but with no call. Every other case
+    /// (first to arrive, an ALTing reader, an external endpoint, another priority) calls
+    /// `rt_in`/`rt_out`.
+    fn communicate(
+        &mut self,
+        output: bool,
+        chan: Value,
+        data: Value,
+        len: i64,
+        span: Span,
+    ) -> Res<()> {
+        let rt = if output { "rt_out" } else { "rt_in" };
+        let ty = match len {
+            1 => types::I8,
+            4 => types::I32,
+            8 => types::I64,
+            _ => {
+                let l = self.iconst(len);
+                return self.blocking(rt, &[self.node, self.ws, chan, data, l], span);
+            }
+        };
+        let (fast, slow, done) = (
+            self.b.create_block(),
+            self.b.create_block(),
+            self.b.create_block(),
+        );
+        let w = self.b.ins().load(types::I64, mem(), chan, 0);
+        let special = self.b.ins().band_imm_u(w, tag::EXTERNAL | tag::ALT);
+        let plain = self.b.ins().icmp_imm_u(IntCC::Equal, special, 0);
+        let waiting = self.b.ins().icmp_imm_u(IntCC::NotEqual, w, NOT_PROCESS);
+        let p = self.b.ins().band_imm_u(w, tag::LOW);
+        let cur = self
+            .b
+            .ins()
+            .load(types::I64, mem(), self.node, NODE_CUR_PRI_OFFSET);
+        let same = self.b.ins().icmp(IntCC::Equal, p, cur);
+        let ok = self.b.ins().band(plain, waiting);
+        let ok = self.b.ins().band(ok, same);
+        self.b.ins().brif(ok, fast, &[], slow, &[]);
+
+        self.b.switch_to_block(fast);
+        let partner = self.b.ins().band_imm_u(w, !tag::MASK);
+        let theirs = self
+            .b
+            .ins()
+            .load(types::I64, mem(), partner, (slot::POINTER * 8) as i32);
+        let (src, dst) = if output {
+            (data, theirs)
+        } else {
+            (theirs, data)
+        };
+        let v = self.b.ins().load(ty, mem(), src, 0);
+        self.b.ins().store(mem(), v, dst, 0);
+        let empty = self.iconst(NOT_PROCESS);
+        self.b.ins().store(mem(), empty, chan, 0);
+        let n = self
+            .b
+            .ins()
+            .load(types::I64, mem(), self.node, NODE_COMMUNICATIONS_OFFSET);
+        let n = self.b.ins().iadd_imm_s(n, 1);
+        self.b
+            .ins()
+            .store(mem(), n, self.node, NODE_COMMUNICATIONS_OFFSET);
+        self.enqueue_partner(partner, p);
+        // A low-priority process gives way to a high-priority one that is ready.
+        let high_front = self
+            .b
+            .ins()
+            .load(types::I64, mem(), self.node, NODE_QUEUES_OFFSET);
+        let high_ready = self.b.ins().icmp_imm_u(IntCC::NotEqual, high_front, 0);
+        let low = self.b.ins().icmp_imm_u(IntCC::Equal, cur, priority::LOW);
+        let give_way = self.b.ins().band(high_ready, low);
+        let preempt = self.b.create_block();
+        self.b.ins().brif(give_way, preempt, &[], done, &[]);
+        self.b.switch_to_block(preempt);
+        self.blocking("rt_preempt", &[self.node, self.ws], span)?;
+        self.b.ins().jump(done, &[]);
+
+        self.b.switch_to_block(slow);
         let l = self.iconst(len);
-        self.blocking("rt_out", &[self.node, self.ws, c, a, l], span)
+        self.blocking(rt, &[self.node, self.ws, chan, data, l], span)?;
+        self.b.ins().jump(done, &[]);
+        self.b.switch_to_block(done);
+        Ok(())
+    }
+
+    /// Appends `partner` to the back of run queue `p` (0: high, 1: low), as `Node::enqueue`,
+    /// without a branch: the partner's address goes into the queue's front when it is empty,
+    /// else into the `LINK` slot of the process at its back.
+    fn enqueue_partner(&mut self, partner: Value, p: Value) {
+        let q = self.b.ins().imul_imm_s(p, 16);
+        let q = self.b.ins().iadd(self.node, q);
+        let zero = self.iconst(0);
+        self.b
+            .ins()
+            .store(mem(), zero, partner, (slot::LINK * 8) as i32);
+        let front = self.b.ins().load(types::I64, mem(), q, NODE_QUEUES_OFFSET);
+        let back = self
+            .b
+            .ins()
+            .load(types::I64, mem(), q, NODE_QUEUES_OFFSET + 8);
+        let empty = self.b.ins().icmp_imm_u(IntCC::Equal, front, 0);
+        let front_slot = self.b.ins().iadd_imm_s(q, i64::from(NODE_QUEUES_OFFSET));
+        let back_link = self.b.ins().iadd_imm_s(back, slot::LINK as i64 * 8);
+        let at = self.b.ins().select(empty, front_slot, back_link);
+        self.b.ins().store(mem(), partner, at, 0);
+        self.b
+            .ins()
+            .store(mem(), partner, q, NODE_QUEUES_OFFSET + 8);
     }
 
     fn output_expr(&mut self, chan: &Expr, e: &Expr, span: Span) -> Res<()> {
@@ -150,7 +270,13 @@ impl Tr<'_, '_> {
     pub fn input_item(&mut self, chan: &Expr, item: &IoItem, span: Span) -> Res<()> {
         match item {
             IoItem::Expr(x) => {
+                let ty = self.cx.type_of(x)?;
                 let l = self.place(x)?;
+                if is_scalar(&self.cx.checked.types, &ty) {
+                    let len = size_of(&self.cx.checked.types, &ty).unwrap_or(8);
+                    let c = self.chan_addr(chan)?;
+                    return self.communicate(false, c, l.addr, len, span);
+                }
                 let size = self.loc_size(&l, x.span)?;
                 let c = self.chan_addr(chan)?;
                 self.blocking("rt_in", &[self.node, self.ws, c, l.addr, size], span)
