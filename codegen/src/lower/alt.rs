@@ -4,9 +4,11 @@
 //! and disables in loops, its branch number carrying the replication index.
 //!
 //! Fast path: an ALT whose guards are all unconditional inputs on channels first reads the
-//! channel words, in the order disabling would take them; the first holding a waiting outputter
-//! (a plain process word: not empty, not an external endpoint) is selected at once, with no
-//! enabling, waiting or disabling. A guard ready when the ALT starts may always be selected, so
+//! channel words, in the order disabling would take them. The first holding a waiting outputter
+//! (a plain process word) is selected at once, with no enabling, waiting or disabling; an empty
+//! word is passed over; a word the poll cannot judge (an external endpoint, such as the keyboard
+//! or a link, which may hold data) sends the ALT to the protocol at once, so that it is never
+//! passed over for a later guard. A guard ready when the ALT starts may always be selected, so
 //! this changes no outcome the T800 protocol allows; when no guard is ready, the protocol runs.
 
 use cranelift_codegen::ir::{InstBuilder, Value, condcodes::IntCC, types};
@@ -114,9 +116,11 @@ impl Tr<'_, '_> {
         self.alt_decls(alt)?;
         let selected = self.b.create_block();
         self.b.append_block_param(selected, types::I64);
+        // One rotation start for the poll and for disabling (plain ALT only).
+        let rotation = self.rotation_start(groups.len(), alt.pri);
         if plain_inputs(&groups) {
             let protocol = self.b.create_block();
-            self.poll_ready(&groups, alt.pri, selected)?;
+            self.poll_ready(&groups, rotation, selected, protocol)?;
             self.b.ins().jump(protocol, &[]);
             self.b.switch_to_block(protocol);
         }
@@ -130,7 +134,7 @@ impl Tr<'_, '_> {
         let wait = if timed { "rt_taltwt" } else { "rt_altwt" };
         self.blocking(wait, &[self.node, self.ws], span)?;
         self.no_poll += 1;
-        self.disable_all(&groups, &saved, alt.pri, span)?;
+        self.disable_all(&groups, &saved, rotation, span)?;
         self.no_poll -= 1;
         let sel = self.call_rt("rt_altend", &[self.node, self.ws]);
         self.b.ins().jump(selected, &[sel.into()]);
@@ -140,14 +144,16 @@ impl Tr<'_, '_> {
     }
 
     /// The fast path: reads each guard's channel word in disabling order and jumps to
-    /// `selected` with the first ready guard's branch number; falls through when none is ready.
+    /// `selected` with the first ready guard's branch number, or to `protocol` at the first word
+    /// holding an external endpoint or an ALT tag; falls through when every word is empty.
     fn poll_ready(
         &mut self,
         groups: &[Group<'_>],
-        pri: bool,
+        rotation: Option<i32>,
         selected: cranelift_codegen::ir::Block,
+        protocol: cranelift_codegen::ir::Block,
     ) -> Res<()> {
-        self.in_order(groups.len(), pri, |tr, gi| {
+        self.in_order(groups.len(), rotation, |tr, gi| {
             let (Group::Single(a) | Group::Repl(_, a)) = &groups[gi];
             let Some(Guard::Chan(c)) = guard_of(a) else {
                 return Err(tr
@@ -156,30 +162,27 @@ impl Tr<'_, '_> {
             };
             let ch = tr.place(c)?.addr;
             let w = tr.b.ins().load(types::I64, mem(), ch, 0);
+            let (occupied, next) = (tr.b.create_block(), tr.b.create_block());
+            let waiting = tr.b.ins().icmp_imm_u(IntCC::NotEqual, w, NOT_PROCESS);
+            tr.b.ins().brif(waiting, occupied, &[], next, &[]);
+            tr.b.switch_to_block(occupied);
             let special = tr.b.ins().band_imm_u(w, tag::EXTERNAL | tag::ALT);
             let plain = tr.b.ins().icmp_imm_u(IntCC::Equal, special, 0);
-            let waiting = tr.b.ins().icmp_imm_u(IntCC::NotEqual, w, NOT_PROCESS);
-            let ready = tr.b.ins().band(plain, waiting);
             let branch = tr.iconst((gi as i64) << 32);
-            let next = tr.b.create_block();
             tr.b.ins()
-                .brif(ready, selected, &[branch.into()], next, &[]);
+                .brif(plain, selected, &[branch.into()], protocol, &[]);
             tr.b.switch_to_block(next);
             Ok(())
         })
     }
 
-    /// Emits `emit(gi)` for each of `n` guard groups in disabling order: textual for a PRI ALT
-    /// (or a single group), otherwise starting from a per-site counter that advances at every
-    /// execution, so that no guard is favoured for ever.
-    fn in_order(
-        &mut self,
-        n: usize,
-        pri: bool,
-        mut emit: impl FnMut(&mut Self, usize) -> Res<()>,
-    ) -> Res<()> {
+    /// For a plain ALT of several groups, draws where this execution's disabling order starts
+    /// from a per-site counter that advances at every execution, so that no guard is favoured
+    /// for ever, and returns the frame slot holding it; `None` for a PRI ALT or a single group
+    /// (textual order).
+    fn rotation_start(&mut self, n: usize, pri: bool) -> Option<i32> {
         if pri || n < 2 {
-            return (0..n).try_for_each(|gi| emit(self, gi));
+            return None;
         }
         let cell = self.cx.intern(vec![0u8; 8]);
         let cell = self.iconst(cell);
@@ -190,6 +193,20 @@ impl Tr<'_, '_> {
         let off = self.frame.alloc(8);
         let a = self.local_addr(off);
         self.b.ins().store(mem(), first, a, 0);
+        Some(off)
+    }
+
+    /// Emits `emit(gi)` for each of `n` guard groups in disabling order: textual without a
+    /// rotation, otherwise from the group in the `rotation` slot round to the one before it.
+    fn in_order(
+        &mut self,
+        n: usize,
+        rotation: Option<i32>,
+        mut emit: impl FnMut(&mut Self, usize) -> Res<()>,
+    ) -> Res<()> {
+        let Some(off) = rotation else {
+            return (0..n).try_for_each(|gi| emit(self, gi));
+        };
         for pass in 0..2 {
             for gi in 0..n {
                 let a = self.local_addr(off);
@@ -234,10 +251,10 @@ impl Tr<'_, '_> {
         &mut self,
         groups: &[Group<'_>],
         saved: &[Vec<i32>],
-        pri: bool,
+        rotation: Option<i32>,
         span: Span,
     ) -> Res<()> {
-        self.in_order(groups.len(), pri, |tr, gi| {
+        self.in_order(groups.len(), rotation, |tr, gi| {
             tr.group(&groups[gi], gi, Some(&saved[gi]), span)
         })
     }
