@@ -77,7 +77,7 @@ fn main() {
             boxes as f64 / n,
             tested as f64 / n
         );
-        for mode in [Traversal::Samet, Traversal::Ropes, Traversal::Glassner] {
+        for mode in Traversal::ALL {
             let (start, cpu_start) = (Instant::now(), cpu_seconds());
             // Five passes over the rays, so that the 10 ms CPU-time ticks do not dominate.
             let hits = (0..5)

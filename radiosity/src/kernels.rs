@@ -1,5 +1,6 @@
-//! The kernels a node runs on the data it holds, as plain functions over plain data, ready to be
-//! registered as intrinsics of the process machine:
+//! The kernels the Rust solver runs, as plain functions over plain data; the occam-callable
+//! forms (extern "C" wrappers declared in `stdlib/radiosity.inc`) are in
+//! [`crate::intrinsics`]:
 //! - [`shoot_batch`]: form factors from a batch of sample points to one source patch;
 //! - [`occlusion_batch`]: answers for a batch of shadow rays;
 //! - [`Octree::voxel`](crate::octree::Octree::voxel): the geometry a voxel embeds.

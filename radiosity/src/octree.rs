@@ -61,6 +61,11 @@ pub enum Traversal {
     Glassner,
 }
 
+impl Traversal {
+    /// Every traversal, for comparisons (they all give the same answers).
+    pub const ALL: [Traversal; 3] = [Traversal::Samet, Traversal::Ropes, Traversal::Glassner];
+}
+
 /// Build settings.
 #[derive(Clone, Copy, Debug)]
 pub struct OctreeConfig {
@@ -487,9 +492,10 @@ const ROPES: u8 = 1;
 const GLASSNER: u8 = 2;
 
 /// One ray's walk through the leaves, in cell units (the finest grid), where a leaf's faces are
-/// integers: `c(t) = oc + dc t`. Cells are held as integer-valued `f32`s in SIMD vectors (exact
-/// below 2^24; the grid has at most 2^20 cells a side), so a step is a handful of vector
-/// instructions; integers appear only for the descent.
+/// integers: `c(t) = oc + dc t`. Cell indices are held as integer-valued `f32`s in SIMD vectors
+/// (exact, as the grid has at most 2^20 cells a side; the ray's position in cell units is
+/// rounded, which the octree's margin covers), so a step is a handful of vector instructions;
+/// integers appear only for the descent.
 ///
 /// The walk keeps `path[l]`, the node at level `l` on the way from the root to the current leaf
 /// (outside the walker, so that it is not copied), so that Samet's climb to the common ancestor
@@ -705,7 +711,7 @@ pub fn occluded_brute_force(tris: &[Tri], o: Vec3, d: Vec3, tmin: f32, tmax: f32
 mod test {
     use super::*;
 
-    const MODES: [Traversal; 3] = [Traversal::Samet, Traversal::Ropes, Traversal::Glassner];
+    const MODES: [Traversal; 3] = Traversal::ALL;
 
     /// A small triangle at `c` (to set the root's bounds).
     fn speck(c: Vec3) -> Tri {

@@ -13,7 +13,7 @@ fn random_point(tris: &[Tri], rng: &mut Pcg32) -> (usize, Vec3) {
     (i, tris[i].sample(rng.next_f32(), rng.next_f32()))
 }
 
-const MODES: [Traversal; 3] = [Traversal::Samet, Traversal::Ropes, Traversal::Glassner];
+const MODES: [Traversal; 3] = Traversal::ALL;
 
 /// Build settings from many small voxels to few large ones.
 const SETTINGS: [(usize, u32); 3] = [(4, 10), (6, 12), (48, 5)];
