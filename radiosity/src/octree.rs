@@ -17,7 +17,7 @@
 //! - **Glassner** (the comparison): the same step, but every descent starts at the root.
 //!
 //! Invariants:
-//! - every triangle that overlaps a leaf's box widened by [`Octree::margin`] is stored in that
+//! - every triangle that overlaps a leaf's box widened by the octree's margin is stored in that
 //!   leaf; neighbouring leaves share their face coordinates exactly (both computed from the same
 //!   integer cell), so no point of space lies in no leaf. The margin covers the rounding of the
 //!   walk's cell coordinates, so the leaf a walk is in holds every triangle the ray can meet
