@@ -110,7 +110,10 @@ pub fn compile_with(
         return Err(CodegenError::NoEntry);
     };
     if e.params.len() > 3 || !e.param_types.iter().all(is_byte_chan) {
-        return Err(CodegenError::BadEntry(name.text.clone()));
+        return Err(CodegenError::BadEntry {
+            name: name.text.clone(),
+            span: name.span,
+        });
     }
     cx.jit.finalize()?;
     let mut info = std::mem::take(&mut cx.info);

@@ -4,7 +4,7 @@
 mod common;
 
 use common::Buf;
-use occ_codegen::{CodegenError, IntrinsicSet};
+use occ_codegen::IntrinsicSet;
 use occ_runtime::abi::Word;
 use occ_runtime::intrinsic::{Intrinsic, MachineType, ParamKind::*};
 use occ_runtime::{HostIo, NodeConfig};
@@ -69,13 +69,22 @@ static TABLE: &[Intrinsic] = &[
     },
 ];
 
-fn build(src: &str) -> Result<occ_codegen::Compiled, CodegenError> {
+/// Compiles `src` against `TABLE`; an error comes back as its diagnostics, one
+/// `file:line: message` each.
+fn build(src: &str) -> Result<occ_codegen::Compiled, String> {
     let parsed = occ_grammar::parse_source("test.occ", src, &mut common::StdlibLoader);
     assert!(!parsed.has_errors(), "{:?}", parsed.diagnostics);
     let (checked, diags) = occ_compiler::check(&parsed.program);
     let checked = checked.unwrap_or_else(|| panic!("{:?}", diags));
     let set = IntrinsicSet::new().with(TABLE);
-    occ_codegen::compile_with(&parsed.program, &checked, &parsed.map, &set)
+    occ_codegen::compile_with(&parsed.program, &checked, &parsed.map, &set).map_err(|e| {
+        let located = |d: &occ_grammar::diagnostic::Diagnostic| {
+            let (file, line) = d.file_line(&parsed.map).unwrap_or(("?", 0));
+            format!("{file}:{line}: {}", d.message)
+        };
+        let lines: Vec<String> = e.diagnostics().iter().map(located).collect();
+        lines.join("\n")
+    })
 }
 
 fn run(src: &str) -> String {
@@ -136,7 +145,7 @@ PROC main (CHAN BYTE keyboard?, screen!, error!)
 :
 "
     );
-    let e = build(&src).err().expect("link error").to_string();
+    let e = build(&src).err().expect("link error");
     assert!(
         e.contains("test.occ:6:") && e.contains("no native intrinsic T.NONE is linked into occ"),
         "{e}"
@@ -168,7 +177,7 @@ fn a_signature_that_disagrees_with_the_table_is_an_error_at_the_pragma() {
         let src = format!(
             "#PRAGMA EXTERNAL \"{decl}\"\nPROC main (CHAN BYTE keyboard?, screen!, error!)\n  SKIP\n:\n"
         );
-        let e = build(&src).err().expect("link error").to_string();
+        let e = build(&src).err().expect("link error");
         assert!(e.contains("test.occ:1:") && e.contains(why), "{decl}: {e}");
     }
 }

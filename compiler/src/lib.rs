@@ -1,5 +1,6 @@
 //! Semantic analysis of occam programs: name resolution, types, constant folding, usage and alias
-//! checks. Every error is a `miette` diagnostic with a span. No file or process IO happens here.
+//! checks. Every error is a diagnostic with a span ([`Diagnostic::to_diagnostic`] gives the
+//! one type every pass of occ produces). No file or process IO happens here.
 //!
 //! Passes (one directory each, `mod.rs` + `test.rs`):
 //! - [`types`]: occam types and their T800 layout (`BYTESIN`, `OFFSETOF`);

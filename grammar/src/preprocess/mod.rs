@@ -15,7 +15,7 @@ mod condition;
 mod test;
 
 use crate::ast::{Name, Pragma, PragmaKind, Span};
-use crate::diagnostic::{Diagnostic, Place, Severity};
+use crate::diagnostic::{Diagnostic, Place};
 use crate::external::ExternalText;
 use crate::source_map::{LineOrigin, Location, SourceFile, SourceMap};
 use condition::Value;
@@ -195,13 +195,8 @@ impl Preprocessor<'_> {
     }
 
     fn error(&mut self, at: Location, message: &str, label: &str) {
-        self.out.diagnostics.push(Diagnostic {
-            severity: Severity::Error,
-            message: message.to_string(),
-            label: label.to_string(),
-            help: None,
-            place: Place::File(at),
-        });
+        let diag = Diagnostic::at(Place::File(at), message, label).with_code("preprocess");
+        self.out.diagnostics.push(diag);
     }
 
     fn directive(
@@ -317,13 +312,10 @@ impl Preprocessor<'_> {
             _ => {
                 let at = line.whole(&self.out.map);
                 let message = format!("#PRAGMA {word} is ignored");
-                let diag = Diagnostic {
-                    severity: Severity::Warning,
-                    message,
-                    label: "this pragma has no effect here".to_string(),
-                    help: None,
-                    place: Place::File(at),
-                };
+                let diag =
+                    Diagnostic::at(Place::File(at), message, "this pragma has no effect here")
+                        .with_code("preprocess")
+                        .warning();
                 return self.out.diagnostics.push(diag);
             }
         };

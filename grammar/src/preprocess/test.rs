@@ -2,6 +2,7 @@
 //! conditionals, defines, pragmas and the line map back to the original files.
 
 use super::*;
+use crate::diagnostic::Severity;
 
 fn run(root: &str, files: &[(&str, &str)]) -> Preprocessed {
     let mut loader: HashMap<String, String> = files
