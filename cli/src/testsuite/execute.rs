@@ -28,6 +28,7 @@ pub fn run_program(
     runner: &Path,
     path: &Path,
     include_dirs: &[std::path::PathBuf],
+    args: &[String],
     stdin: &str,
 ) -> Result<Execution, String> {
     use std::io::{Read, Write};
@@ -37,6 +38,7 @@ pub fn run_program(
     for d in include_dirs {
         cmd.arg("-I").arg(d);
     }
+    cmd.args(args);
     let mut child = cmd
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
