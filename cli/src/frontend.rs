@@ -1,5 +1,6 @@
-//! The file-system edge of the front end: load an occam file and its includes, preprocess, parse and
-//! check it, and return its diagnostics in a form both `occ check` and `occ test` use.
+//! The file-system edge of the front end: read an occam file, load its includes, run the one
+//! IO-free front end (`occ_codegen::front_end`: preprocess, parse, check, bind EXTERNALs) and
+//! return its diagnostics located in files, in a form both `occ check` and `occ test` use.
 //!
 //! Contract (relied on by `commands::check` and the `occ test` harness):
 //! - `check_file` never panics and never hangs on any input; every problem is a `Diag`.
@@ -96,35 +97,21 @@ pub fn load(path: &Path, options: &Options) -> (Option<Front>, Checked) {
         Err(error) => return (None, unreadable(path, &error)),
     };
     let mut loader = FsLoader::new(options);
-    let parsed = occ_grammar::parse_source(&path.display().to_string(), &text, &mut loader);
-    let mut found = parsed.diagnostics.clone();
-
-    // The checker runs only on a complete tree: on a partial one every dropped declaration
-    // would come back as a cascade of "not declared" errors. A complete tree may still carry
-    // syntax errors that drop nothing (operators mixed without parentheses), so those and the
-    // checker's errors are reported in one run.
-    let mut checked_program = None;
-    if parsed.complete {
-        let check_options = occ_compiler::Options::from_source(&text);
-        let (checked, diags) = occ_compiler::check_with(&parsed.program, check_options);
-        found.extend(diags.iter().map(occ_compiler::Diagnostic::to_diagnostic));
-        if let Some(c) = &checked {
-            let bindings = occ_codegen::link::bind_externals(c, &intrinsics());
-            found.extend(bindings.errors);
-        }
-        checked_program = checked;
-    }
-    let mut diagnostics: Vec<Diag> = found.iter().map(|d| Diag::new(d, &parsed.map)).collect();
+    let path_text = path.display().to_string();
+    let front = occ_codegen::front_end(&path_text, &text, &mut loader, &intrinsics());
+    let map = &front.parsed.map;
+    let mut diagnostics: Vec<Diag> = front
+        .diagnostics
+        .iter()
+        .map(|d| Diag::new(d, map))
+        .collect();
     diagnostics.sort_by(|a, b| (&a.file, a.line).cmp(&(&b.file, b.line)));
     let checked = Checked { diagnostics };
-    let front = match checked_program {
-        Some(checked_program) if !checked.has_errors() => Some(Front {
-            parsed,
-            checked: checked_program,
-        }),
-        _ => None,
-    };
-    (front, checked)
+    let passed = front.checked.map(|checked| Front {
+        parsed: front.parsed,
+        checked,
+    });
+    (passed, checked)
 }
 
 /// The native intrinsics occ links programs against: the runtime's own and the radiosity

@@ -72,19 +72,7 @@ static TABLE: &[Intrinsic] = &[
 /// Compiles `src` against `TABLE`; an error comes back as its diagnostics, one
 /// `file:line: message` each.
 fn build(src: &str) -> Result<occ_codegen::Compiled, String> {
-    let parsed = occ_grammar::parse_source("test.occ", src, &mut common::StdlibLoader);
-    assert!(!parsed.has_errors(), "{:?}", parsed.diagnostics);
-    let (checked, diags) = occ_compiler::check(&parsed.program);
-    let checked = checked.unwrap_or_else(|| panic!("{:?}", diags));
-    let set = IntrinsicSet::new().with(TABLE);
-    occ_codegen::compile_with(&parsed.program, &checked, &parsed.map, &set).map_err(|e| {
-        let located = |d: &occ_grammar::diagnostic::Diagnostic| {
-            let (file, line) = d.file_line(&parsed.map).unwrap_or(("?", 0));
-            format!("{file}:{line}: {}", d.message)
-        };
-        let lines: Vec<String> = e.diagnostics().iter().map(located).collect();
-        lines.join("\n")
-    })
+    common::try_compile(src, &IntrinsicSet::new().with(TABLE))
 }
 
 fn run(src: &str) -> String {
@@ -217,12 +205,8 @@ PROC main (CHAN BYTE keyboard?, screen!, error!)
     out.bool (b, 0, screen!)
 :
 ";
-    let parsed = occ_grammar::parse_source("test.occ", src, &mut common::StdlibLoader);
-    let (checked, _) = occ_compiler::check(&parsed.program);
-    let checked = checked.expect("checks");
-    let set = IntrinsicSet::new().with(BUMP);
-    let c = occ_codegen::compile_with(&parsed.program, &checked, &parsed.map, &set)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let c =
+        common::try_compile(src, &IntrinsicSet::new().with(BUMP)).unwrap_or_else(|e| panic!("{e}"));
     let out = Buf::default();
     let host = HostIo::new(
         Box::new(std::io::empty()),

@@ -138,7 +138,13 @@ fn judge_file(path: &Path, source: &str, expectation: &Expectation, config: &Con
         return verdict;
     }
     let stdin = input_text(&expectation.stdin);
-    match execute::run_program(&config.runner, path, &include_dirs, &expectation.args, &stdin) {
+    match execute::run_program(
+        &config.runner,
+        path,
+        &include_dirs,
+        &expectation.args,
+        &stdin,
+    ) {
         Err(why) => Verdict::Fail(why),
         Ok(run) => {
             if config.bless && expectation.kind == Kind::Run {
