@@ -6,7 +6,7 @@
 //! - the speed-up of an embarrassingly parallel node program on a ternary tree of 13 nodes
 //!   from one worker thread to two;
 //! - the round trip of an 8-byte message over an in-process link between two nodes (one per
-//!   thread), and the throughput of 64 KB messages over it.
+//!   thread), and the throughput of 64 KB messages sent back and forth over it.
 
 use std::time::{Duration, Instant};
 
@@ -39,51 +39,52 @@ fn check(name: &str, o: &NetworkOutcome) {
 
 /// Every node spins through `work` iterations, then the sums go up the tree to the root.
 fn parallel_work(work: u64) -> String {
-    format!(
-        "PROC node (VAL INT id, nodes, []CHAN OF INT in?, out!, CHAN BYTE keyboard?, screen!, error!)\n\
-  INT sum:\n\
-  SEQ\n\
-    sum := 0\n\
-    SEQ i = 0 FOR {work}\n\
-      sum := (sum + (i /\\ 255)) /\\ #FFFFFF\n\
-    SEQ k = 1 FOR 3\n\
-      IF\n\
-        ((3 * id) + k) < nodes\n\
-          INT v:\n\
-          SEQ\n\
-            in[k] ? v\n\
-            sum := (sum + v) /\\ #FFFFFF\n\
-        TRUE\n\
-          SKIP\n\
-    IF\n\
-      id > 0\n\
-        out[0] ! sum\n\
-      TRUE\n\
-        SKIP\n\
-:\n"
-    )
+    r"PROC node (VAL INT id, nodes, []CHAN OF INT in?, out!, CHAN BYTE keyboard?, screen!, error!)
+  INT sum:
+  SEQ
+    sum := 0
+    SEQ i = 0 FOR WORK
+      sum := (sum + (i /\ 255)) /\ #FFFFFF
+    SEQ k = 1 FOR 3
+      IF
+        ((3 * id) + k) < nodes
+          INT v:
+          SEQ
+            in[k] ? v
+            sum := (sum + v) /\ #FFFFFF
+        TRUE
+          SKIP
+    IF
+      id > 0
+        out[0] ! sum
+      TRUE
+        SKIP
+:
+"
+    .replace("WORK", &work.to_string())
 }
 
-/// Node 0 sends `n` messages of `bytes` bytes to node 1 on link 1, which answers each with one
-/// word on the same link's way back.
+/// Node 0 sends `n` messages of `bytes` bytes to node 1 on link 1, which answers each with
+/// the same message back.
 fn ping_pong(n: u64, bytes: usize) -> String {
-    format!(
-        "PROC node (VAL INT id, nodes, []CHAN OF ANY in?, out!, CHAN BYTE keyboard?, screen!, error!)\n\
-  [{bytes}]BYTE buf:\n\
-  INT ack:\n\
-  IF\n\
-    id = 0\n\
-      SEQ i = 0 FOR {n}\n\
-        SEQ\n\
-          out[1] ! buf\n\
-          in[1] ? ack\n\
-    TRUE\n\
-      SEQ i = 0 FOR {n}\n\
-        SEQ\n\
-          in[0] ? buf\n\
-          out[0] ! i\n\
-:\n"
-    )
+    r"PROTOCOL MSG IS [BYTES]BYTE:
+PROC node (VAL INT id, nodes, []CHAN OF MSG in?, out!, CHAN BYTE keyboard?, screen!, error!)
+  [BYTES]BYTE buf:
+  IF
+    id = 0
+      SEQ i = 0 FOR COUNT
+        SEQ
+          out[1] ! buf
+          in[1] ? buf
+    TRUE
+      SEQ i = 0 FOR COUNT
+        SEQ
+          in[0] ? buf
+          out[0] ! buf
+:
+"
+    .replace("BYTES", &bytes.to_string())
+    .replace("COUNT", &n.to_string())
 }
 
 /// The best wall time of `runs` runs of `src` on `shape` with `threads` worker threads.
@@ -128,8 +129,8 @@ fn main() {
     let m: u64 = if quick { 2_000 } else { 20_000 };
     let t = best(&ping_pong(m, 65536), pair, 2, 3);
     println!(
-        "in-process link, 2 nodes on 2 threads: 64 KB messages {:.0} MB/s ({m} messages)",
-        (m as f64 * 65536.0) / t.as_secs_f64() / 1e6
+        "in-process link, 2 nodes on 2 threads: 64 KB messages {:.0} MB/s ({m} round trips)",
+        (2.0 * m as f64 * 65536.0) / t.as_secs_f64() / 1e6
     );
     let start = Instant::now();
     let _ = best(&ping_pong(n, 8), pair, 1, 1);
