@@ -30,8 +30,11 @@ pub struct FormFactorConfig {
     /// The analytic form is used when the disc estimator's bias bound `(A/m) / (π d_min²)`
     /// exceeds this (0: always analytic; infinity: always Wallace).
     pub max_disc_bias: f32,
-    /// Ray origins are lifted by this distance along the receiver normal, and rays stop this far
-    /// short of the source.
+    /// Ray origins are lifted by this distance along the receiver normal, and rays end at the
+    /// source sample lifted by this distance along the source normal. Both ends then lie off
+    /// the planes they start and end on, so a ray can meet neither its receiver's surface nor
+    /// its source's, however grazing (a ray stopped short *along itself* stays within rounding
+    /// of the source plane at grazing angles and hits it).
     pub offset: f32,
 }
 
@@ -142,10 +145,9 @@ pub fn form_factor_with(
             continue;
         }
         above += 1;
-        let d = x - origin;
-        let tmax = 1.0 - config.offset / d.length().max(config.offset * 2.0);
+        let d = x + ns * config.offset - origin;
         rays += 1;
-        if occluded(k, origin, d, tmax) {
+        if occluded(k, origin, d, 1.0) {
             continue;
         }
         visible += 1;
