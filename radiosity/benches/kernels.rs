@@ -1,7 +1,7 @@
 //! Criterion benchmarks of the kernels, single thread:
 //! - occlusion rays/s on the Cornell box with each quad split 18 × 18 (10,368 triangles), rays
-//!   between random surface points (origin lifted 1e-3 mm, tmax 0.999), as the Embree anchor
-//!   in notes/radiosity-references.md §5; Samet, ropes and Glassner traversal;
+//!   between random surface points (origin lifted 1e-3 mm, tmax 0.999), as measured for
+//!   Embree 4 (`rtcOccluded1`, through the `embreex` Python binding) in `BENCHMARKS.md`; Samet, ropes and Glassner traversal;
 //! - form factors/s (16 shadow rays each, Cornell box, light as source);
 //! - time to a converged Cornell box (reference solver; rayon uses the pool it is given, see
 //!   the `solve` group note).

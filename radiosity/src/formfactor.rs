@@ -10,7 +10,7 @@
 //!
 //! When to switch: each Wallace term underestimates the point-sample term by the factor
 //! `πr² / (πr² + ΔA)`, so its relative bias is about `ΔA / (π r²)` (about 1% for 16 rays to a unit
-//! square at distance 1, which is what notes §1a's table shows). The analytic form is used when
+//! square at distance 1, as a table of ray-cast against exact form factors shows). The analytic form is used when
 //! that bound at the nearest point of the source, `(A/m) / (π d_min²)`, exceeds `max_disc_bias`.
 //!
 //! Sources are one-sided: a receiver behind the source's plane gets zero.

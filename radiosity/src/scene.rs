@@ -783,7 +783,7 @@ pub mod cornell {
 
     /// Returns the Cornell box with each quad (an object of two triangles) split into an
     /// `n × n` grid of cells, two triangles each (`n = 18` gives the 10,368 triangles of the
-    /// throughput benchmark in the notes §5).
+    /// throughput benchmark in `BENCHMARKS.md`).
     pub fn grid_triangles(n: u32) -> Result<Vec<crate::geom::Tri>, super::SceneError> {
         let scene = load(true)?;
         let mut out = Vec::new();

@@ -1,4 +1,5 @@
-//! Form factors against the closed forms of notes/radiosity-references.md §1b, and reciprocity.
+//! Form factors against the closed forms of the configuration-factor catalogues (Howell C-11;
+//! Incropera, Table 13.2), and reciprocity.
 
 use glam::Vec3;
 use occ_radiosity::formfactor::{FormFactorConfig, form_factor, point_polygon, source_samples};
@@ -151,7 +152,8 @@ fn differential_area_to_rectangle_and_disc() {
 #[test]
 fn near_field_needs_the_analytic_form() {
     // Point 0.1 under the centre of a unit square: exact 0.968340. Wallace alone with 16 rays is
-    // far off (notes §1a: 0.3757); the analytic extension is exact.
+    // far off (0.3757, Wallace, Elmquist & Haines, SIGGRAPH 1989, point-sample form); the analytic
+    // extension is exact.
     let src = rect(Vec3::new(-0.5, 0.1, -0.5), Vec3::X, Vec3::Z);
     let mut rng = Pcg32::new(5, 5);
     let mut s = Vec::new();

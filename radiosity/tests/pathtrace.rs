@@ -1,5 +1,5 @@
 //! The path tracer (the ground truth) against exact answers: the irradiance under a square light
-//! (Lambert's contour integral, closed forms in the notes §1b), the closed furnace box
+//! (Lambert's contour integral, the catalogue closed forms: Howell C-11, Incropera Table 13.2), the closed furnace box
 //! `B = E / (1 - ρ)`, and its own stored Cornell box reference. Tolerances are in standard errors
 //! of the estimate under test (4σ: a correct estimator fails one check in about 16,000).
 

@@ -68,7 +68,8 @@ fn light_patches(solver: &Solver) -> u64 {
 #[test]
 fn cornell_floor_centre_direct_irradiance() {
     // Blocks removed; after every light patch has shot once, H = B / ρ at (278, 0, 279.6) must be
-    // (0.7590, 0.5358, 0.1786) within 1% (notes §1c; Mitsuba direct-only agrees).
+    // (0.7590, 0.5358, 0.1786) within 1%: F = 0.014212 to the light times L = (17, 12, 4), which
+    // Mitsuba with direct lighting only reproduces (0.7589, 0.5359, 0.1786).
     let scene = cornell::load(false).expect("scene");
     let mesh = MeshConfig {
         patch_size: 120.0,

@@ -9,7 +9,7 @@
 //!
 //! Run: `cargo bench -p occ-runtime --bench machine`. Each criterion iteration is one loop; a
 //! sample runs a fresh node for that many loops. Times are **thread CPU time**
-//! (`CLOCK_THREAD_CPUTIME_ID`), as in the design notes' measurements, so that other load on the
+//! (`CLOCK_THREAD_CPUTIME_ID`), so that other load on the
 //! shared 2-core machine does not inflate them; the node runs on the measuring thread.
 
 use std::time::Duration;

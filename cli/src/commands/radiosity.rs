@@ -1,5 +1,5 @@
 //! `occ radiosity`: reads the scene (or takes the embedded Cornell box), runs the reference
-//! solver and writes the outputs of ARCHITECTURE.md §7 into `--out`. All the work is in
+//! solver and writes its outputs (report, convergence, image, mesh; see the README) into `--out`. All the work is in
 //! `occ-radiosity`; this module only parses flags, reads and writes files and shows progress.
 
 use std::io::{IsTerminal, Write};

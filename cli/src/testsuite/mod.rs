@@ -1,7 +1,7 @@
 //! The data-driven language test harness behind `occ test` (and `cargo test` through
 //! `cli/tests/lang.rs`).
 //!
-//! Each `.occ` file under the given paths states its own expectation in comments (STYLE.md §4.1):
+//! Each `.occ` file under the given paths states its own expectation in comments (`tests/README.md`):
 //!
 //! - `-- test: accept` — the front end finds no errors.
 //! - `-- test: error` — every line carrying `-- error: <text>` gets an error containing `<text>`
