@@ -279,11 +279,11 @@ impl Tr<'_, '_> {
         }
         // Multiple assignment: evaluate every value first, then store.
         let vals: Vec<(Value, Type)> = if rhs.len() == 1 && lhs.len() > 1 {
-            let (name, args) = match &rhs[0].kind {
-                ExprKind::Call { name, args } => (name, args),
+            let vs = match &rhs[0].kind {
+                ExprKind::Call { name, args } => self.call_function(name, args, span)?,
+                ExprKind::Valof(v) => self.valof(v)?,
                 _ => return Err(self.cx.internal(span, "multiple assignment from one value")),
             };
-            let vs = self.call_function(name, args, span)?;
             vs.into_iter().map(|v| (v, Type::Error)).collect()
         } else {
             let mut out = Vec::new();
