@@ -42,13 +42,17 @@ pub enum ErrorKind {
     MessageLength = 10,
     /// Occurs when a host or intrinsic operation fails (for example writing stdout).
     Host = 11,
+    /// Occurs when a REAL division has a zero divisor (occam's REAL arithmetic is checked).
+    Floating = 12,
+    /// Occurs when a replicator's count is negative.
+    ReplicatorCount = 13,
 }
 
 impl ErrorKind {
     /// The kind with code `code`.
     pub fn from_code(code: Word) -> Option<ErrorKind> {
         use ErrorKind::*;
-        const ALL: [ErrorKind; 12] = [
+        const ALL: [ErrorKind; 14] = [
             Stop,
             IfNoBranch,
             CaseNoMatch,
@@ -61,6 +65,8 @@ impl ErrorKind {
             Assert,
             MessageLength,
             Host,
+            Floating,
+            ReplicatorCount,
         ];
         usize::try_from(code).ok().and_then(|i| ALL.get(i).copied())
     }
@@ -82,6 +88,8 @@ impl ErrorKind {
             ErrorKind::Assert => "ASSERT failed",
             ErrorKind::MessageLength => "message length mismatch",
             ErrorKind::Host => "host I/O failed",
+            ErrorKind::Floating => "floating-point error: REAL division by zero",
+            ErrorKind::ReplicatorCount => "negative replicator count",
         }
     }
 }

@@ -85,6 +85,11 @@ impl Tr<'_, '_> {
         let (idx_off, left_off) = (self.frame.alloc(8), self.frame.alloc(8));
         let base = self.expr(&r.base)?;
         let count = self.expr(&r.count)?;
+        let counts = self
+            .b
+            .ins()
+            .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, count, 0);
+        self.check(counts, ErrorKind::ReplicatorCount, r.count.span);
         let step_off = self.frame.alloc(8);
         let step = match &r.step {
             Some(s) => self.expr(s)?,

@@ -272,6 +272,12 @@ impl Checker {
                 None => (Type::INT, integer(*value, *hex, negate, Prim::Int)),
             },
             LitKind::Real(text) => {
+                if text
+                    .find(['E', 'e'])
+                    .is_some_and(|e| !text[e + 1..].starts_with(['+', '-']))
+                {
+                    self.error(DiagnosticKind::ExponentSign, span);
+                }
                 let p = ctx_prim.filter(|p| p.is_real()).unwrap_or(Prim::Real64);
                 let text = if negate {
                     format!("-{text}")
