@@ -163,9 +163,14 @@ impl<'a> Layout<'a> {
                 .iter()
                 .rposition(|(_, t, _)| matches!(t, Token::LParen | Token::BlockOpen))
                 .map_or(first, |p| first + p + 1);
+            // Names in array sizes (`[n]INT FUNCTION`) stay names.
+            let mut depth = 0usize;
             for (_, token, _) in &mut self.out[start..first + function] {
-                if let Token::Name(name) = token {
-                    *token = Token::TypeName(name);
+                match token {
+                    Token::LBracket => depth += 1,
+                    Token::RBracket => depth = depth.saturating_sub(1),
+                    Token::Name(name) if depth == 0 => *token = Token::TypeName(name),
+                    _ => {}
                 }
             }
         }

@@ -174,8 +174,8 @@ impl Tr<'_, '_> {
         let [addr] = vals[..] else {
             return Err(self.cx.internal(e.span, "one result expected"));
         };
-        let under = self.cx.checked.types.underlying(&ty).clone();
-        let dims = crate::layout::static_dims(&under)
+        let ty = crate::layout::resolve(&self.cx.checked.types, &ty);
+        let dims = crate::layout::static_dims(&ty)
             .into_iter()
             .map(|d| self.iconst(i64::from(d.unwrap_or(0))))
             .collect();
@@ -209,8 +209,7 @@ impl Tr<'_, '_> {
         if let Some(fields) = crate::layout::record_fields(&self.cx.checked.types, &ty) {
             return self.record_value(items, fields, ty, e);
         }
-        let named = matches!(ty, Type::Named(_)).then(|| ty.clone());
-        let ty = self.cx.checked.types.underlying(&ty).clone();
+        let ty = crate::layout::resolve(&self.cx.checked.types, &ty);
         let Some(elem) = ty.elem().cloned() else {
             return Err(self.cx.internal(e.span, "table of non-array type"));
         };
@@ -228,7 +227,7 @@ impl Tr<'_, '_> {
         }
         Ok(Loc {
             addr: base,
-            ty: named.unwrap_or_else(|| Type::Array(Some(items.len() as u32), Box::new(elem))),
+            ty: Type::Array(Some(items.len() as u32), Box::new(elem)),
             dims,
         })
     }
