@@ -274,9 +274,8 @@ impl Checker {
             self.error(DiagnosticKind::BadOperand { op: "CASE", ty }, selector.span);
         }
         let mut seen: Vec<Value> = Vec::new();
-        let mut elses = options.iter().filter(|o| o.values.is_none());
-        if let (Some(_), Some(second)) = (elses.next(), elses.next()) {
-            self.error(DiagnosticKind::DuplicateElse, second.span);
+        for extra in options.iter().filter(|o| o.values.is_none()).skip(1) {
+            self.error(DiagnosticKind::DuplicateElse, extra.span);
         }
         for o in options {
             let mark = self.open_scope();
