@@ -292,7 +292,7 @@ mod test {
 
     #[test]
     fn fixed_point_has_ip_plus_dp_plus_two_characters() {
-        assert_eq!(f32s(3.14159, 2, 3), "  3.142");
+        assert_eq!(f32s(4.56789, 2, 3), "  4.568");
         assert_eq!(f32s(-2.5, 1, 1), "-2.5");
         assert_eq!(f32s(0.0, 3, 2), "   0.00");
         assert_eq!(f32s(99.5, 2, 1), " 99.5");
