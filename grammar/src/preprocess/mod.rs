@@ -70,7 +70,6 @@ pub fn preprocess(path: &str, text: &str, loader: &mut dyn Loader) -> Preprocess
 fn predefines() -> HashMap<String, Value> {
     let mut defines = HashMap::new();
     defines.insert("TARGET.BITS.PER.WORD".to_string(), Value::Int(32));
-    defines.insert("COMPILER.TOCK".to_string(), Value::Bool(true));
     defines.insert("OCC".to_string(), Value::Bool(true));
     defines
 }
