@@ -66,6 +66,19 @@ pub enum DiagnosticKind {
         /// The value, as written.
         value: String,
     },
+    /// Occurs when a CASE has more than one ELSE. Example: `ELSE` ... `ELSE` in one CASE.
+    DuplicateElse,
+    /// Occurs when a VALOF (a FUNCTION body or value process) holds a PAR or ALT.
+    /// Example: `INT FUNCTION f () ... VALOF` / `PAR` ...
+    NotInValof {
+        /// `PAR` or `ALT`.
+        what: &'static str,
+    },
+    /// Occurs when a PRI PAR is nested in the high-priority branch of another (there are only
+    /// two priorities). Example: `PRI PAR` / `  PRI PAR` ...
+    NestedPriPar,
+    /// Occurs when the exponent of a REAL literal has no sign. Example: `1.0E5` for `1.0E+5`.
+    ExponentSign,
     /// Occurs when a FUNCTION or VALOF changes or communicates on something declared outside
     /// it. Example: `INT FUNCTION f () ... VALOF total := 0 ...` with `total` a free variable.
     SideEffect {
@@ -209,6 +222,17 @@ impl DiagnosticKind {
                 format!("conversion from {from} to {to} needs ROUND or TRUNC")
             }
             DuplicateOption { value } => format!("CASE option {value} appears more than once"),
+            DuplicateElse => "a CASE may have only one ELSE".into(),
+            NotInValof { what } => {
+                format!("{what} is not allowed in a FUNCTION or VALOF (a value process)")
+            }
+            NestedPriPar => {
+                "PRI PAR inside the high-priority branch of a PRI PAR (there are only two priorities)"
+                    .into()
+            }
+            ExponentSign => {
+                "the exponent of a REAL literal needs a sign: write E+n or E-n".into()
+            }
             SideEffect { name } => format!(
                 "`{name}` is declared outside this FUNCTION or VALOF, which may not change it or communicate on it"
             ),

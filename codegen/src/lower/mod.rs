@@ -65,6 +65,16 @@ pub enum Storage {
         /// Byte offset of the address word.
         offset: i32,
     },
+    /// A table of channels abbreviated (`ins IS [d, c] :`): the `len` words at `offset` hold
+    /// the channels' addresses, so that `ins[i]` is the channel itself, not a copy of its word.
+    ChanTable {
+        /// Lexical depth of the owning function.
+        depth: u32,
+        /// Byte offset of the first address word.
+        offset: i32,
+        /// The number of channels.
+        len: u32,
+    },
     /// A compile-time constant.
     Const(Const),
     /// A compiled PROC.

@@ -89,6 +89,10 @@ pub(crate) struct Checker {
     tables: crate::usage::Tables,
     /// Index values of replicators with constant base, count and step (and a small count).
     repl_values: crate::fxhash::FxHashMap<SymbolId, Vec<i64>>,
+    /// Above zero inside a VALOF (a FUNCTION body or value process): no PAR or ALT there.
+    valof_depth: u32,
+    /// Inside the first (high-priority) branch of a PRI PAR: no PRI PAR there.
+    high_priority: bool,
 }
 
 /// Checks that a program can switch off, as occ21's `#OPTION` letters do.
@@ -170,6 +174,8 @@ impl Checker {
             fn_bodies: Default::default(),
             tables: Vec::new(),
             repl_values: Default::default(),
+            valof_depth: 0,
+            high_priority: false,
         };
         for pragma in &program.pragmas {
             let set = match pragma.kind {

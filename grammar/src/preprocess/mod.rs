@@ -81,7 +81,6 @@ fn option_letters(rest: &str) -> &str {
 fn predefines() -> HashMap<String, Value> {
     let mut defines = HashMap::new();
     defines.insert("TARGET.BITS.PER.WORD".to_string(), Value::Int(32));
-    defines.insert("COMPILER.TOCK".to_string(), Value::Bool(true));
     defines.insert("OCC".to_string(), Value::Bool(true));
     defines
 }

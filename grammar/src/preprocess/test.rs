@@ -95,7 +95,7 @@ fn use_finds_module_then_inc_then_occ() {
 
 #[test]
 fn if_else_selects_one_branch_and_skips_the_other_unlexed() {
-    let text = "#IF DEFINED (COMPILER.TOCK)\nyes\n#ELSE\n$$ not occam $$\n#ENDIF\n";
+    let text = "#IF DEFINED (OCC)\nyes\n#ELSE\n$$ not occam $$\n#ENDIF\n";
     let out = run(text, &[]);
     assert_eq!(lines(&out), ["yes"]);
 }
