@@ -98,7 +98,7 @@ impl<'a> Layout<'a> {
                 let span = lexer.span();
                 let (start, end) = (base + span.start, base + span.end);
                 match result {
-                    Ok(Token::Newline) => {
+                    Ok(Token::LineBreak) => {
                         if let Some(resume) = self.newline(start) {
                             base = resume;
                             continue 'restart;

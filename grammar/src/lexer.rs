@@ -42,10 +42,11 @@ impl LexError {
 #[logos(skip r"[ \t\r\f]+")]
 #[logos(skip(r"--[^\n]*", allow_greedy = true))]
 pub enum Token<'a> {
-    /// End of a physical line (turned into layout by [`crate::layout`]).
+    /// The `\n` that ends a physical line, as lexed; [`crate::layout`] turns these into
+    /// [`Token::NewLine`], [`Token::Indent`] and [`Token::Dedent`] and none reaches the parser.
     #[token("\n")]
-    Newline,
-    /// A layout line break: the end of a logical line.
+    LineBreak,
+    /// The end of a logical line (made by the layout pass; continuation lines have none).
     NewLine,
     /// Indentation increased by one level.
     Indent,

@@ -193,7 +193,7 @@ fn occam_term(terminal: &str) -> String {
 /// Describes a token for "unexpected ..." messages.
 fn describe(token: &Token) -> String {
     match token {
-        Token::NewLine | Token::Newline => "end of line".to_string(),
+        Token::NewLine | Token::LineBreak => "end of line".to_string(),
         Token::Indent => "indentation".to_string(),
         Token::Dedent => "end of an indented block".to_string(),
         Token::Name(n) | Token::TypeName(n) => format!("name `{n}`"),
