@@ -114,21 +114,16 @@ impl Default for Options {
 }
 
 impl Options {
-    /// Reads the `#OPTION "..."` directives of a source text: `A` switches alias checking off and
-    /// `N` usage checking, as in occ21. Other letters are accepted and ignored.
-    pub fn from_source(text: &str) -> Options {
+    /// Reads the letters of a program's `#OPTION` directives, as the preprocessor records them
+    /// ([`occ_grammar::Parsed::options`]): `A` switches alias checking off and `N` usage
+    /// checking, as in occ21. Other letters are accepted and ignored.
+    pub fn from_letters(letters: &str) -> Options {
         let mut o = Options::default();
-        for line in text.lines() {
-            let Some(rest) = line.trim_start().strip_prefix("#OPTION") else {
-                continue;
-            };
-            let letters = rest.trim().trim_matches('"');
-            for ch in letters.chars().take_while(|c| *c != '"') {
-                match ch.to_ascii_uppercase() {
-                    'A' => o.alias = false,
-                    'N' => o.usage = false,
-                    _ => {}
-                }
+        for ch in letters.chars() {
+            match ch.to_ascii_uppercase() {
+                'A' => o.alias = false,
+                'N' => o.usage = false,
+                _ => {}
             }
         }
         o

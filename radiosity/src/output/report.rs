@@ -103,6 +103,9 @@ pub struct Report {
     pub links: Vec<serde_json::Value>,
     /// Final relative RMS error against `--reference`, if given.
     pub rms_error: Option<f64>,
+    /// Each object's error against the path-traced truth (`--reference-mc`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth: Option<Vec<super::truth::ObjectError>>,
 }
 
 /// Builds the report of a finished solve.
@@ -149,6 +152,7 @@ pub fn build(solver: &Solver, file: &str, timings: Timings) -> Report {
         }],
         links: Vec::new(),
         rms_error: solver.rms_error(),
+        truth: None,
     }
 }
 
@@ -219,7 +223,11 @@ pub fn reference_mismatch(file: &str, text: &str, objects: &[(String, f64)]) -> 
         ));
     }
     let ours: std::collections::HashSet<&str> = objects.iter().map(|(n, _)| n.as_str()).collect();
-    let mut extra: Vec<&str> = theirs.keys().copied().filter(|n| !ours.contains(n)).collect();
+    let mut extra: Vec<&str> = theirs
+        .keys()
+        .copied()
+        .filter(|n| !ours.contains(n))
+        .collect();
     extra.sort_unstable();
     if !extra.is_empty() {
         out.push(format!(
