@@ -11,7 +11,10 @@ fn main() -> Result<(), String> {
     let usage = "usage: gen_scene TRIANGLES OUT.obj [SEED]";
     let triangles: u64 = args.first().and_then(|a| a.parse().ok()).ok_or(usage)?;
     let out = std::path::PathBuf::from(args.get(1).ok_or(usage)?);
-    let seed: u64 = args.get(2).map_or(Ok(1), |s| s.parse()).map_err(|_| usage)?;
+    let seed: u64 = args
+        .get(2)
+        .map_or(Ok(1), |s| s.parse())
+        .map_err(|_| usage)?;
     let scene = rooms(RoomsConfig::about(triangles, seed));
     let mtl_path = out.with_extension("mtl");
     let mtl_name = mtl_path

@@ -38,7 +38,9 @@ impl RoomsConfig {
     /// face, or fewer for small scenes).
     pub fn about(triangles: u64, seed: u64) -> RoomsConfig {
         let subdivision = if triangles < 20_000 { 1 } else { 4 };
-        let rooms = triangles.div_ceil(Self::triangles_per_room(subdivision)).max(1);
+        let rooms = triangles
+            .div_ceil(Self::triangles_per_room(subdivision))
+            .max(1);
         let side = (rooms as f64).sqrt().ceil() as u32;
         let rooms_z = (rooms as u32).div_ceil(side);
         RoomsConfig {
@@ -98,7 +100,14 @@ fn furnish(scene: &mut Scene, origin: Vec3, s: u32, rng: &mut Pcg32) {
     });
     let mut j = || rng.next_f32() - 0.5;
     let light_lo = Vec3::new(2.0 + 0.3 * j(), ROOM.y - 0.06, 1.6 + 0.3 * j());
-    boxed(scene, at(light_lo), at(light_lo + Vec3::new(1.0, 0.05, 0.8)), s, false, |_| LIGHT);
+    boxed(
+        scene,
+        at(light_lo),
+        at(light_lo + Vec3::new(1.0, 0.05, 0.8)),
+        s,
+        false,
+        |_| LIGHT,
+    );
     // A table: a top on four legs, somewhere near the middle.
     let table = Vec3::new(1.5 + 0.4 * j(), 0.0, 1.2 + 0.4 * j());
     let (tw, td, th) = (1.6, 1.0, 0.75);
@@ -110,9 +119,21 @@ fn furnish(scene: &mut Scene, origin: Vec3, s: u32, rng: &mut Pcg32) {
         false,
         |_| WOOD,
     );
-    for (x, z) in [(0.05, 0.05), (tw - 0.1, 0.05), (0.05, td - 0.1), (tw - 0.1, td - 0.1)] {
+    for (x, z) in [
+        (0.05, 0.05),
+        (tw - 0.1, 0.05),
+        (0.05, td - 0.1),
+        (tw - 0.1, td - 0.1),
+    ] {
         let leg = table + Vec3::new(x, 0.0, z);
-        boxed(scene, at(leg), at(leg + Vec3::new(0.05, th - 0.04, 0.05)), s, false, |_| WOOD);
+        boxed(
+            scene,
+            at(leg),
+            at(leg + Vec3::new(0.05, th - 0.04, 0.05)),
+            s,
+            false,
+            |_| WOOD,
+        );
     }
     // Four chairs around it: a seat on four legs and a back.
     for k in 0..4 {
@@ -127,9 +148,21 @@ fn furnish(scene: &mut Scene, origin: Vec3, s: u32, rng: &mut Pcg32) {
             false,
             |_| WOOD,
         );
-        for (x, z) in [(0.0, 0.0), (cw - 0.04, 0.0), (0.0, cw - 0.04), (cw - 0.04, cw - 0.04)] {
+        for (x, z) in [
+            (0.0, 0.0),
+            (cw - 0.04, 0.0),
+            (0.0, cw - 0.04),
+            (cw - 0.04, cw - 0.04),
+        ] {
             let leg = chair + Vec3::new(x, 0.0, z);
-            boxed(scene, at(leg), at(leg + Vec3::new(0.04, seat - 0.03, 0.04)), s, false, |_| WOOD);
+            boxed(
+                scene,
+                at(leg),
+                at(leg + Vec3::new(0.04, seat - 0.03, 0.04)),
+                s,
+                false,
+                |_| WOOD,
+            );
         }
         let back_z = if k < 2 { 0.0 } else { cw - 0.03 };
         boxed(
@@ -143,7 +176,14 @@ fn furnish(scene: &mut Scene, origin: Vec3, s: u32, rng: &mut Pcg32) {
     }
     // A shelf against the far wall.
     let shelf = Vec3::new(0.5 + 2.0 * (j() + 0.5), 0.0, ROOM.z - 0.4);
-    boxed(scene, at(shelf), at(shelf + Vec3::new(1.2, 1.8, 0.4)), s, false, |_| WOOD);
+    boxed(
+        scene,
+        at(shelf),
+        at(shelf + Vec3::new(1.2, 1.8, 0.4)),
+        s,
+        false,
+        |_| WOOD,
+    );
 }
 
 /// Adds the box `lo..hi`, each face cut into `s × s` quads, facing in (a room) or out. `object`
@@ -196,11 +236,18 @@ fn boxed(
 /// written per triangle, as many exporters do; the loader welds them.
 pub fn to_obj(scene: &Scene, mtl_name: &str) -> (String, String) {
     use std::fmt::Write;
-    let mut obj = format!("# generated rooms: {} triangles\nmtllib {mtl_name}\n", scene.triangles.len());
+    let mut obj = format!(
+        "# generated rooms: {} triangles\nmtllib {mtl_name}\n",
+        scene.triangles.len()
+    );
     let mut mtl = String::new();
     for (i, o) in scene.objects.iter().enumerate() {
         let (r, e) = (o.reflectance, o.emission);
-        let _ = writeln!(mtl, "newmtl {}\nKd {} {} {}\nKe {} {} {}", o.name, r.x, r.y, r.z, e.x, e.y, e.z);
+        let _ = writeln!(
+            mtl,
+            "newmtl {}\nKd {} {} {}\nKe {} {} {}",
+            o.name, r.x, r.y, r.z, e.x, e.y, e.z
+        );
         let _ = writeln!(obj, "o {}\nusemtl {}", o.name, o.name);
         for t in scene.triangles.iter().filter(|t| t.object == i as u32) {
             for v in t.tri.v {
@@ -237,7 +284,11 @@ mod tests {
         // hidden, as is the ceiling behind each light.
         assert!(s.hidden_pieces as u64 >= 2 * rooms, "{s:?}");
         assert!(s.d0_cuts > 0 && s.split_points > 0, "{s:?}");
-        let meshed: f64 = mesh.elements.iter().map(|e| mesh.tri(e).area() as f64).sum();
+        let meshed: f64 = mesh
+            .elements
+            .iter()
+            .map(|e| mesh.tri(e).area() as f64)
+            .sum();
         let input: f64 = scene.triangles.iter().map(|t| t.tri.area() as f64).sum();
         assert!((meshed - input).abs() < 1e-4 * input, "{meshed} {input}");
     }

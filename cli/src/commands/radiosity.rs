@@ -139,12 +139,16 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         let text = read(path)?;
         let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
         let file = path.display().to_string();
-        for warning in report::reference_mismatch(&file, &text, &solver.object_means()
-            .iter()
-            .zip(&names)
-            .map(|((area, _), n)| (n.clone(), *area))
-            .collect::<Vec<_>>())
-        {
+        for warning in report::reference_mismatch(
+            &file,
+            &text,
+            &solver
+                .object_means()
+                .iter()
+                .zip(&names)
+                .map(|((area, _), n)| (n.clone(), *area))
+                .collect::<Vec<_>>(),
+        ) {
             eprintln!("warning: {warning}");
         }
         solver.reference = Some(report::reference_means(&file, &text, &names)?);
@@ -215,10 +219,19 @@ fn print_left_out(name: &str, scene: &Scene, mesh: &Mesh, diag: f32) {
     let counts = [
         (c.collapsed, "smaller than the weld distance, left out"),
         (c.duplicates, "duplicates, left out"),
-        (c.two_sided, "two-sided pairs, meshed as two one-sided surfaces"),
-        (c.slivers, "slivers narrower than the weld distance, not cut"),
+        (
+            c.two_sided,
+            "two-sided pairs, meshed as two one-sided surfaces",
+        ),
+        (
+            c.slivers,
+            "slivers narrower than the weld distance, not cut",
+        ),
         (c.non_manifold_edges, "non-manifold edges"),
-        (c.flipped_edges, "edges between triangles of one object facing opposite ways"),
+        (
+            c.flipped_edges,
+            "edges between triangles of one object facing opposite ways",
+        ),
     ];
     for (n, what) in counts.into_iter().filter(|c| c.0 > 0) {
         eprintln!(

@@ -219,7 +219,11 @@ pub fn reference_mismatch(file: &str, text: &str, objects: &[(String, f64)]) -> 
         ));
     }
     let ours: std::collections::HashSet<&str> = objects.iter().map(|(n, _)| n.as_str()).collect();
-    let mut extra: Vec<&str> = theirs.keys().copied().filter(|n| !ours.contains(n)).collect();
+    let mut extra: Vec<&str> = theirs
+        .keys()
+        .copied()
+        .filter(|n| !ours.contains(n))
+        .collect();
     extra.sort_unstable();
     if !extra.is_empty() {
         out.push(format!(
@@ -228,13 +232,13 @@ pub fn reference_mismatch(file: &str, text: &str, objects: &[(String, f64)]) -> 
         ));
     }
     for (name, area) in objects {
-        if let Some(Some(r)) = theirs.get(name.as_str()) {
-            if (area - r).abs() > 0.01 * r.abs().max(*area) {
-                out.push(format!(
-                    "{file}: object {name} has area {area:.4e} here and {r:.4e} in the \
-                     reference: a different scene?"
-                ));
-            }
+        if let Some(Some(r)) = theirs.get(name.as_str())
+            && (area - r).abs() > 0.01 * r.abs().max(*area)
+        {
+            out.push(format!(
+                "{file}: object {name} has area {area:.4e} here and {r:.4e} in the \
+                 reference: a different scene?"
+            ));
         }
     }
     out
