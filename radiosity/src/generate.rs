@@ -284,11 +284,7 @@ mod tests {
         // hidden, as is the ceiling behind each light.
         assert!(s.hidden_pieces as u64 >= 2 * rooms, "{s:?}");
         assert!(s.d0_cuts > 0 && s.split_points > 0, "{s:?}");
-        let meshed: f64 = mesh
-            .elements
-            .iter()
-            .map(|e| mesh.tri(e).area() as f64)
-            .sum();
+        let meshed: f64 = mesh.object_areas(scene.objects.len()).iter().sum();
         let input: f64 = scene.triangles.iter().map(|t| t.tri.area() as f64).sum();
         assert!((meshed - input).abs() < 1e-4 * input, "{meshed} {input}");
     }
