@@ -17,6 +17,7 @@
 #![deny(missing_docs)]
 
 pub mod formfactor;
+pub mod generate;
 pub mod geom;
 pub mod grid;
 pub mod intrinsics;
