@@ -88,8 +88,14 @@ pub fn load(path: &Path, options: &Options) -> (Option<Front>, Checked) {
         Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
         Err(error) => return (None, unreadable(path, &error)),
     };
+    load_text(&path.display().to_string(), &text, options)
+}
+
+/// [`load`] for a program held in memory under the file name `name` (programs embedded in
+/// `occ`, such as carm.occ); its includes are searched for as those of a file `name`.
+pub fn load_text(name: &str, text: &str, options: &Options) -> (Option<Front>, Checked) {
     let mut loader = FsLoader::new(options);
-    let parsed = occ_grammar::parse_source(&path.display().to_string(), &text, &mut loader);
+    let parsed = occ_grammar::parse_source(name, text, &mut loader);
     let mut diagnostics: Vec<Diag> = parsed
         .diagnostics
         .iter()
@@ -102,7 +108,7 @@ pub fn load(path: &Path, options: &Options) -> (Option<Front>, Checked) {
     // checker's errors are reported in one run.
     let mut checked_program = None;
     if parsed.complete {
-        let check_options = occ_compiler::Options::from_source(&text);
+        let check_options = occ_compiler::Options::from_source(text);
         let (checked, found) = occ_compiler::check_with(&parsed.program, check_options);
         diagnostics.extend(found.iter().map(|d| {
             let severity = match d.severity {

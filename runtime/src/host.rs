@@ -30,6 +30,8 @@ pub struct HostIo {
     input: Box<dyn Read + Send>,
     screen: BufWriter<Box<dyn Write + Send>>,
     error: BufWriter<Box<dyn Write + Send>>,
+    /// Whether [`FLUSH`] bytes are written as they are (a host protocol of binary data).
+    binary: bool,
 }
 
 impl std::fmt::Debug for HostIo {
@@ -49,6 +51,20 @@ impl HostIo {
             input,
             screen: BufWriter::with_capacity(1 << 16, screen),
             error: BufWriter::new(error),
+            binary: false,
+        }
+    }
+
+    /// Binds to the given streams for a program that speaks a binary protocol with its host:
+    /// every byte sent to `screen` or `error` is written, [`FLUSH`] too.
+    pub fn binary(
+        input: Box<dyn Read + Send>,
+        screen: Box<dyn Write + Send>,
+        error: Box<dyn Write + Send>,
+    ) -> HostIo {
+        HostIo {
+            binary: true,
+            ..HostIo::new(input, screen, error)
         }
     }
 
@@ -62,18 +78,22 @@ impl HostIo {
     }
 
     /// Writes `bytes` to `stream`; a [`FLUSH`] byte is not written but flushes the stream (as
-    /// KRoC's screen process does for the course library's `flush`). Error output is flushed at
-    /// once.
+    /// KRoC's screen process does for the course library's `flush`), unless the host is
+    /// [`HostIo::binary`]. Error output is flushed at once.
     pub(crate) fn write(&mut self, stream: HostStream, bytes: &[u8]) -> std::io::Result<()> {
         let w = match stream {
             HostStream::Screen => &mut self.screen,
             HostStream::Error => &mut self.error,
         };
-        let mut parts = bytes.split(|&b| b == FLUSH).peekable();
-        while let Some(part) = parts.next() {
-            w.write_all(part)?;
-            if parts.peek().is_some() {
-                w.flush()?;
+        if self.binary {
+            w.write_all(bytes)?;
+        } else {
+            let mut parts = bytes.split(|&b| b == FLUSH).peekable();
+            while let Some(part) = parts.next() {
+                w.write_all(part)?;
+                if parts.peek().is_some() {
+                    w.flush()?;
+                }
             }
         }
         if stream == HostStream::Error {

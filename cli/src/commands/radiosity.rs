@@ -1,6 +1,7 @@
 //! `occ radiosity`: reads the scene (or takes the embedded Cornell box), runs the reference
-//! solver and writes the outputs of ARCHITECTURE.md §7 into `--out`. All the work is in
-//! `occ-radiosity`; this module only parses flags, reads and writes files and shows progress.
+//! solver or carm.occ (`--solver carm`, [`super::carm`]) and writes the outputs of
+//! ARCHITECTURE.md §7 into `--out`. All the radiosity is in `occ-radiosity` or carm.occ; this
+//! module only parses flags, reads and writes files and shows progress.
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -14,11 +15,15 @@ use occ_radiosity::output::{image, plot, ply, probe, report};
 use occ_radiosity::scene::{self, Scene};
 use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
 
+use super::carm;
+
 /// Which solver to run.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum SolverKind {
     /// The sequential Rust reference solver.
     Reference,
+    /// programs/carm.occ on a ternary tree of `--nodes` simulated transputers.
+    Carm,
 }
 
 /// Flags of `occ radiosity`.
@@ -44,6 +49,12 @@ pub struct Args {
     /// Solver.
     #[arg(long, value_enum, default_value = "reference")]
     pub solver: SolverKind,
+    /// Nodes of the ternary tree carm.occ runs on (`--solver carm`).
+    #[arg(long, default_value_t = 13)]
+    pub nodes: usize,
+    /// OS threads running carm.occ's nodes (default: one per core); 1 repeats runs exactly.
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Longest patch (shooter) edge; default: scene diagonal / 4.
     #[arg(long)]
     pub patch_size: Option<f32>,
@@ -135,14 +146,36 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         None => None,
     };
     let t3 = Instant::now();
-    solve(&mut solver);
+    let network = match args.solver {
+        SolverKind::Reference => {
+            solve(&mut solver);
+            None
+        }
+        SolverKind::Carm => {
+            let threads = args.threads.unwrap_or_else(|| {
+                std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+            });
+            let settings = carm::CarmSettings {
+                nodes: args.nodes,
+                threads,
+            };
+            Some(carm::solve(&mut solver, settings)?)
+        }
+    };
     let timings = report::Timings {
         load,
         mesh: mesh_time,
         octree: octree_time,
         solve: t3.elapsed().as_secs_f64(),
     };
-    write_outputs(&args, &solver, &name, timings, probes.as_deref())?;
+    write_outputs(
+        &args,
+        &solver,
+        &name,
+        timings,
+        probes.as_deref(),
+        network.as_ref(),
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -159,6 +192,18 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
         args.image_size >= 8 && args.image_size <= 8192,
         "--image-size must be between 8 and 8192"
     );
+    anyhow::ensure!(args.nodes >= 1, "--nodes must be at least 1");
+    if let SolverKind::Carm = args.solver {
+        anyhow::ensure!(
+            args.no_adapt,
+            "--solver carm does not subdivide yet: give --no-adapt"
+        );
+        anyhow::ensure!(
+            !matches!(args.until, Until::Seconds(_)),
+            "--solver carm takes --until unshot=F or shots=N"
+        );
+    }
+    anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
     for (flag, v) in [
         ("--patch-size", args.patch_size),
         ("--element-size", args.element_size),
@@ -240,6 +285,7 @@ fn write_outputs(
     name: &str,
     timings: report::Timings,
     probes: Option<&[probe::Probe]>,
+    network: Option<&carm::CarmReport>,
 ) -> anyhow::Result<()> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -248,9 +294,16 @@ fn write_outputs(
             .with_context(|| format!("cannot write {}", out.join(file).display()))
     };
     let rep = report::build(solver, name, timings);
+    // carm.occ's report: the same, with its nodes' and links' counters.
+    let mut json = serde_json::to_value(&rep)?;
+    if let Some(net) = network {
+        json["solver"] = "carm".into();
+        json["nodes"] = serde_json::to_value(&net.nodes)?;
+        json["links"] = serde_json::to_value(&net.links)?;
+    }
     write(
         "report.json",
-        serde_json::to_string_pretty(&rep)?.as_bytes(),
+        serde_json::to_string_pretty(&json)?.as_bytes(),
     )?;
     write(
         "convergence.csv",

@@ -47,6 +47,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: source_samples_into as *const u8,
     },
     Intrinsic {
+        name: "RAD.SOURCE.SAMPLES.AT",
+        params: &[ValReal32s, ValInt, ValInt, ValInt, VarReal32s, ResultInt],
+        result: None,
+        addr: source_samples_at as *const u8,
+    },
+    Intrinsic {
         name: "RAD.FORM.FACTOR",
         params: &[
             ValReal32s,
@@ -173,12 +179,45 @@ pub unsafe extern "C" fn source_samples_into(
     out_len: Word,
     count: *mut Word,
 ) {
+    // SAFETY: the caller's contract is this one's.
+    unsafe { source_samples_at(tri, tri_len, m, seed, 0, out, out_len, count) }
+}
+
+/// Most sets `RAD.SOURCE.SAMPLES.AT` skips.
+pub const MAX_SKIPPED_SETS: Word = 1 << 16;
+
+/// `PROC RAD.SOURCE.SAMPLES.AT (VAL []REAL32 tri, VAL INT m, VAL INT seed, VAL INT set,
+/// []REAL32 out, RESULT INT count)`: `RAD.SOURCE.SAMPLES` for the `set`-th set of samples the
+/// generator seeded with `seed` draws (set 0 is `RAD.SOURCE.SAMPLES`'s). The Rust solver draws
+/// one set per receiver from one generator per batch of receivers, so a node that holds a
+/// receiver without its batch-mates takes its samples with this. `count` is -1 (and `out`
+/// untouched) as for `RAD.SOURCE.SAMPLES`, and when `set` is not in 0..=65536.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn source_samples_at(
+    tri: *const f32,
+    tri_len: Word,
+    m: Word,
+    seed: Word,
+    set: Word,
+    out: *mut f32,
+    out_len: Word,
+    count: *mut Word,
+) {
     // SAFETY: the ABI passes a valid array.
     let tri = triangle(unsafe { array(tri, tri_len) });
     let mut samples = Vec::new();
-    if let Some(tri) = tri.filter(|_| (1..=MAX_SAMPLES).contains(&m)) {
+    let valid = (1..=MAX_SAMPLES).contains(&m) && (0..=MAX_SKIPPED_SETS).contains(&set);
+    if let Some(tri) = tri.filter(|_| valid) {
         let mut rng = Pcg32::new(seed as u64, SAMPLE_STREAM);
-        source_samples(&tri, m as u32, &mut rng, &mut samples);
+        for _ in 0..=set {
+            source_samples(&tri, m as u32, &mut rng, &mut samples);
+        }
     }
     let floats = 3 * samples.len();
     let written = if samples.is_empty() || floats as Word > out_len {
