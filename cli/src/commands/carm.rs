@@ -177,6 +177,7 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     w.int(int(mesh.elements.len(), "elements")?);
     w.int(config.form_factor.rays as i32);
     w.int64(config.seed as i64);
+    w.real32(config.form_factor.offset);
     w.int(int(max_shots.min(i32::MAX as u64) as usize, "shots")?);
     w.real64(until_unshot);
     w.real64(config.overshoot);
@@ -365,6 +366,9 @@ impl Writer {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
     fn int64(&mut self, v: i64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn real32(&mut self, v: f32) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
     fn real64(&mut self, v: f64) {
