@@ -63,7 +63,9 @@ fn scratch(name: &str) -> std::path::PathBuf {
 fn carm_on_1_4_and_13_nodes_agrees_with_the_reference_solver() {
     let reference = radiosity(&scratch("carm-reference"), &["--solver", "reference"]);
     let want = means(&reference);
-    let vertices = reference["scene"]["final_vertices"].as_u64().expect("vertices");
+    let vertices = reference["scene"]["final_vertices"]
+        .as_u64()
+        .expect("vertices");
     assert!(want.len() >= 5, "the Cornell box has its objects");
     for nodes in ["1", "4", "13"] {
         let dir = scratch(&format!("carm-{nodes}"));
@@ -92,7 +94,9 @@ fn carm_on_1_4_and_13_nodes_agrees_with_the_reference_solver() {
             .sum();
         assert_eq!(held, vertices);
         assert_eq!(
-            report["totals"]["unshot_fraction"].as_f64().map(|f| f <= 0.05),
+            report["totals"]["unshot_fraction"]
+                .as_f64()
+                .map(|f| f <= 0.05),
             Some(true)
         );
     }

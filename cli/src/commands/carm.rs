@@ -83,8 +83,6 @@ pub struct CarmReport {
     pub nodes: Vec<NodeCounters>,
     /// Per link direction.
     pub links: Vec<LinkCounters>,
-    /// Wall time of the network run, seconds.
-    pub seconds: f64,
 }
 
 /// Runs carm.occ on `solver`'s scene and mesh and books its solution into `solver` (irradiance,
@@ -130,9 +128,7 @@ pub fn solve(solver: &mut Solver, settings: CarmSettings) -> anyhow::Result<Carm
         failed.join("\n"),
         text
     );
-    let out = screen.take();
-    if let Ok(p) = std::env::var("CARM_DUMP") { let _ = std::fs::write(p, &out); }
-    let nodes = book(solver, &out)?;
+    let nodes = book(solver, &screen.take())?;
     Ok(report(&outcome, nodes))
 }
 
@@ -187,7 +183,12 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
         w.vec3(v[1] - v[0]);
         w.vec3(v[2] - v[0]);
     }
-    for ((p, &o), u) in mesh.patches.iter().zip(&mesh.patch_object).zip(&solver.unshot) {
+    for ((p, &o), u) in mesh
+        .patches
+        .iter()
+        .zip(&mesh.patch_object)
+        .zip(&solver.unshot)
+    {
         for v in p.v {
             w.vec3(v);
         }
@@ -282,7 +283,10 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
             }
             tag::PATCHES => {
                 let count = r.int()? as usize;
-                anyhow::ensure!(count == 3 * patches, "carm.occ reported {count} patch values");
+                anyhow::ensure!(
+                    count == 3 * patches,
+                    "carm.occ reported {count} patch values"
+                );
                 for (p, u) in solver.unshot.iter().enumerate() {
                     let theirs = DVec3::new(r.real64()?, r.real64()?, r.real64()?);
                     anyhow::ensure!(
@@ -350,11 +354,7 @@ fn report(outcome: &NetworkOutcome, nodes: Vec<[u64; 5]>) -> CarmReport {
             bytes: l.bytes,
         })
         .collect();
-    CarmReport {
-        nodes,
-        links,
-        seconds: wall,
-    }
+    CarmReport { nodes, links }
 }
 
 /// Little-endian writer of the host protocol.

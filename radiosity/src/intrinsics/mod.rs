@@ -76,13 +76,7 @@ pub static INTRINSICS: &[Intrinsic] = &[
     Intrinsic {
         name: "RAD.SHADOW.RAYS.LIFTED",
         params: &[
-            ValReal32s,
-            ValReal32s,
-            ValReal32s,
-            ValReal32s,
-            ValReal32,
-            VarReal32s,
-            ResultInt,
+            ValReal32s, ValReal32s, ValReal32s, ValReal32s, ValReal32, VarReal32s, ResultInt,
         ],
         result: None,
         addr: shadow_rays_lifted as *const u8,
