@@ -103,13 +103,22 @@ fn carm_on_1_4_and_13_nodes_agrees_with_the_reference_solver() {
 }
 
 #[test]
-fn carm_refuses_adaptive_subdivision_and_a_time_limit_clearly() {
+fn carm_refuses_what_it_cannot_do_clearly() {
     let out = scratch("carm-refusals");
     for (flags, says) in [
         (&["--solver", "carm"][..], "--no-adapt"),
         (
             &["--solver", "carm", "--no-adapt", "--until", "time=1"][..],
             "--until unshot=F or shots=N",
+        ),
+        (
+            &["--solver", "carm", "--no-adapt", "--nodes", "1025"][..],
+            "carm.occ runs on 1 to 1024 nodes",
+        ),
+        // About 25,000 sample points: more than carm.occ's arrays hold.
+        (
+            &["--solver", "carm", "--no-adapt", "--element-size", "8"][..],
+            "over carm.occ's capacities: at most 4096 triangles, 2048 patches, 16384 sample points",
         ),
     ] {
         let output = Command::new(env!("CARGO_BIN_EXE_occ"))

@@ -22,6 +22,9 @@ use crate::frontend::{self, Options};
 /// The node program, embedded so that `occ radiosity` works from any folder.
 pub const PROGRAM: &str = include_str!("../../../programs/carm.occ");
 
+/// Most nodes carm.occ takes (its `MAX.NODES`; each node's arrays take about 3 MB).
+const MAX_NODES: usize = 1024;
+
 /// Loop back-edges per timeslice when `--threads 1` makes runs repeat exactly (as `occ run`).
 const COUNTED_SLICE: u32 = 1024;
 
@@ -93,6 +96,11 @@ pub fn solve(solver: &mut Solver, settings: CarmSettings) -> anyhow::Result<Carm
         solver.config().adapt.is_none(),
         "--solver carm does not subdivide yet: give --no-adapt"
     );
+    anyhow::ensure!(
+        (1..=MAX_NODES).contains(&settings.nodes),
+        "--nodes {}: carm.occ runs on 1 to {MAX_NODES} nodes",
+        settings.nodes
+    );
     let input = host_input(solver)?;
     let compiled = compile()?;
     let shape: Shape = format!("tree3:{}", settings.nodes)
@@ -116,6 +124,11 @@ pub fn solve(solver: &mut Solver, settings: CarmSettings) -> anyhow::Result<Carm
     let outcome = compiled
         .run_topology(shape, &opts, host)
         .map_err(|e| anyhow::anyhow!("carm.occ: {e}"))?;
+    let out = screen.take();
+    if out.starts_with(&tag::REFUSED.to_le_bytes()) {
+        // The controller refused the scene and stopped; the other nodes' fate is no news.
+        book(solver, &out)?;
+    }
     let failed: Vec<String> = outcome
         .errors()
         .iter()
@@ -128,7 +141,7 @@ pub fn solve(solver: &mut Solver, settings: CarmSettings) -> anyhow::Result<Carm
         failed.join("\n"),
         text
     );
-    let nodes = book(solver, &screen.take())?;
+    let nodes = book(solver, &out)?;
     Ok(report(&outcome, nodes))
 }
 
