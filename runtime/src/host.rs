@@ -55,16 +55,12 @@ impl HostIo {
         }
     }
 
-    /// Binds to the given streams for a program that speaks a binary protocol with its host:
-    /// every byte sent to `screen` or `error` is written, [`FLUSH`] too.
-    pub fn binary(
-        input: Box<dyn Read + Send>,
-        screen: Box<dyn Write + Send>,
-        error: Box<dyn Write + Send>,
-    ) -> HostIo {
+    /// The same streams for a program that speaks a binary protocol with its host: every byte
+    /// sent to `screen` or `error` is written, [`FLUSH`] too.
+    pub fn binary(self) -> HostIo {
         HostIo {
             binary: true,
-            ..HostIo::new(input, screen, error)
+            ..self
         }
     }
 
@@ -125,5 +121,45 @@ impl HostIo {
         self.screen.flush()?;
         self.error.flush()?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+    use std::sync::{Arc, Mutex};
+
+    #[derive(Clone, Default)]
+    struct Buf(Arc<Mutex<Vec<u8>>>);
+
+    impl Write for Buf {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().expect("not poisoned").extend_from_slice(b);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    fn screen_after(binary: bool) -> Vec<u8> {
+        let out = Buf::default();
+        let io = HostIo::new(
+            Box::new(std::io::empty()),
+            Box::new(out.clone()),
+            Box::new(std::io::sink()),
+        );
+        let mut io = if binary { io.binary() } else { io };
+        io.write(HostStream::Screen, &[1, FLUSH, 2])
+            .expect("writes");
+        io.flush().expect("flushes");
+        let bytes = out.0.lock().expect("not poisoned").clone();
+        bytes
+    }
+
+    #[test]
+    fn flush_bytes_flush_text_and_pass_through_binary() {
+        assert_eq!(screen_after(false), [1, 2]);
+        assert_eq!(screen_after(true), [1, FLUSH, 2]);
     }
 }

@@ -108,11 +108,12 @@ pub fn solve(solver: &mut Solver, settings: CarmSettings) -> anyhow::Result<Carm
         .map_err(|e| anyhow::anyhow!("--nodes {}: {e}", settings.nodes))?;
     let screen = SharedBuf::default();
     let errors = SharedBuf::default();
-    let host = HostIo::binary(
+    let host = HostIo::new(
         Box::new(Cursor::new(input)),
         Box::new(screen.clone()),
         Box::new(errors.clone()),
-    );
+    )
+    .binary();
     let mut node = NodeConfig::default();
     if settings.threads == 1 {
         node.counted_slices = Some(COUNTED_SLICE);
