@@ -11,7 +11,8 @@ use std::time::Instant;
 use anyhow::Context;
 use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::mesh::{Mesh, MeshConfig};
-use occ_radiosity::output::{image, plot, ply, probe, report};
+use occ_radiosity::output::{image, plot, ply, probe, report, truth};
+use occ_radiosity::pathtrace::{PathTraceConfig, PathTracer};
 use occ_radiosity::scene::{self, Scene};
 use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
 
@@ -95,6 +96,17 @@ pub struct Args {
     /// --patch-size / --element-size are refused.
     #[arg(long, default_value_t = 4_000_000)]
     pub max_elements: usize,
+    /// Run only the path tracer (the ground truth): each object's mean B and the probes' B with
+    /// standard errors, into `pathtrace.json`.
+    #[arg(long, conflicts_with = "reference_mc")]
+    pub pathtrace: bool,
+    /// Run the path tracer beside the solver: report.json gets each object's error against it,
+    /// convergence.csv/png the RMS error against it over time.
+    #[arg(long, conflicts_with = "reference")]
+    pub reference_mc: bool,
+    /// Path tracer: paths per object and per probe (the standard error falls as 1/sqrt).
+    #[arg(long, default_value_t = 65_536)]
+    pub pt_samples: u64,
 }
 
 /// Runs `occ radiosity`.
@@ -110,6 +122,22 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         })?);
     }
     let load = t0.elapsed().as_secs_f64();
+    let probes = match &args.probe {
+        Some(path) => Some(probe::parse_probes(
+            &path.display().to_string(),
+            &read(path)?,
+        )?),
+        None => None,
+    };
+    let truth = if args.pathtrace || args.reference_mc {
+        let probes = probes.as_deref().unwrap_or_default();
+        Some(path_trace(&args, &name, &scene, probes)?)
+    } else {
+        None
+    };
+    if args.pathtrace {
+        return Ok(ExitCode::SUCCESS);
+    }
     let t1 = Instant::now();
     let mesh_config = mesh_config(&args, &name, &scene)?;
     progress.stage(
@@ -164,13 +192,15 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         }
         solver.reference = Some(report::reference_means(&file, &text, &names)?);
     }
-    let probes = match &args.probe {
-        Some(path) => Some(probe::parse_probes(
-            &path.display().to_string(),
-            &read(path)?,
-        )?),
-        None => None,
-    };
+    if let Some(truth) = &truth {
+        let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
+        solver.reference = Some(
+            names
+                .iter()
+                .map(|n| truth.object(n).map(|o| o.mean_b.into()))
+                .collect(),
+        );
+    }
     let t3 = Instant::now();
     let network = match args.solver {
         SolverKind::Reference => {
@@ -208,7 +238,11 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         &name,
         timings,
         probes.as_deref(),
+<<<<<<< HEAD
         network.as_ref(),
+=======
+        truth.as_ref(),
+>>>>>>> main
     )?;
     Ok(ExitCode::SUCCESS)
 }
@@ -305,7 +339,59 @@ impl Progress {
     }
 }
 
+/// Runs the path tracer on the scene and probes, writes `pathtrace.json` into `--out` and prints
+/// the per-object means; returns the reference.
+fn path_trace(
+    args: &Args,
+    name: &str,
+    scene: &Scene,
+    probes: &[probe::Probe],
+) -> anyhow::Result<truth::Reference> {
+    let config = PathTraceConfig {
+        samples: args.pt_samples,
+        seed: args.seed,
+        ..PathTraceConfig::default()
+    };
+    let start = Instant::now();
+    let tracer = PathTracer::new(scene);
+    let means = tracer.object_means(&config);
+    let at_probes = tracer.probes(probes, &config);
+    let seconds = start.elapsed().as_secs_f64();
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let pairs: Vec<_> = probes.iter().copied().zip(at_probes).collect();
+    let reference =
+        truth::Reference::new((name, scene), &command, &config, seconds, &means, &pairs);
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let path = args.out.join("pathtrace.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&reference)?)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    for o in &reference.objects {
+        let rel = |c: usize| 100.0 * o.std_err[c] / o.mean_b[c].max(f64::MIN_POSITIVE);
+        println!(
+            "{:<24} B = {:9.5} {:9.5} {:9.5}   std err {:.2}% {:.2}% {:.2}%",
+            o.name,
+            o.mean_b[0],
+            o.mean_b[1],
+            o.mean_b[2],
+            rel(0),
+            rel(1),
+            rel(2)
+        );
+    }
+    println!(
+        "{name}: path traced, {} paths per object, {seconds:.2} s; written to {}",
+        config.samples,
+        path.display()
+    );
+    Ok(reference)
+}
+
 fn check_args(args: &Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        args.pt_samples >= 2,
+        "--pt-samples must be at least 2 (a standard error needs two samples)"
+    );
     anyhow::ensure!(
         args.rays >= 1 && args.rays <= 65_536,
         "--rays must be between 1 and 65536"
@@ -422,7 +508,11 @@ fn write_outputs(
     name: &str,
     timings: report::Timings,
     probes: Option<&[probe::Probe]>,
+<<<<<<< HEAD
     network: Option<&carm::CarmReport>,
+=======
+    truth: Option<&truth::Reference>,
+>>>>>>> main
 ) -> anyhow::Result<()> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -430,6 +520,7 @@ fn write_outputs(
         std::fs::write(out.join(file), bytes)
             .with_context(|| format!("cannot write {}", out.join(file).display()))
     };
+<<<<<<< HEAD
     let rep = report::build(solver, name, timings);
     // carm.occ's report: the same, with its nodes' and links' counters.
     let mut json = serde_json::to_value(&rep)?;
@@ -437,6 +528,20 @@ fn write_outputs(
         json["solver"] = "carm".into();
         json["nodes"] = serde_json::to_value(&net.nodes)?;
         json["links"] = serde_json::to_value(&net.links)?;
+=======
+    let mut rep = report::build(solver, name, timings);
+    if let Some(truth) = truth {
+        let names: Vec<String> = solver
+            .scene
+            .objects
+            .iter()
+            .map(|o| o.name.clone())
+            .collect();
+        let means: Vec<_> = solver.object_means().into_iter().map(|(_, b)| b).collect();
+        let errors = truth::object_errors(&names, &means, truth);
+        print!("{}", truth::error_table(&errors));
+        rep.truth = Some(errors);
+>>>>>>> main
     }
     write(
         "report.json",

@@ -103,6 +103,9 @@ pub struct Report {
     pub links: Vec<serde_json::Value>,
     /// Final relative RMS error against `--reference`, if given.
     pub rms_error: Option<f64>,
+    /// Each object's error against the path-traced truth (`--reference-mc`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth: Option<Vec<super::truth::ObjectError>>,
 }
 
 /// Builds the report of a finished solve.
@@ -149,6 +152,7 @@ pub fn build(solver: &Solver, file: &str, timings: Timings) -> Report {
         }],
         links: Vec::new(),
         rms_error: solver.rms_error(),
+        truth: None,
     }
 }
 
