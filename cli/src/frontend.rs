@@ -103,57 +103,13 @@ pub fn load(path: &Path, options: &Options) -> (Option<Front>, Checked) {
 /// `occ`, such as carm.occ); its includes are searched for as those of a file `name`.
 pub fn load_text(name: &str, text: &str, options: &Options) -> (Option<Front>, Checked) {
     let mut loader = FsLoader::new(options);
-<<<<<<< HEAD
-    let parsed = occ_grammar::parse_source(name, text, &mut loader);
-    let mut diagnostics: Vec<Diag> = parsed
-=======
-    let path_text = path.display().to_string();
-    let front = occ_codegen::front_end(&path_text, &text, &mut loader, &intrinsics());
+    let front = occ_codegen::front_end(name, text, &mut loader, &intrinsics());
     let map = &front.parsed.map;
     let mut diagnostics: Vec<Diag> = front
->>>>>>> main
         .diagnostics
         .iter()
         .map(|d| Diag::new(d, map))
         .collect();
-<<<<<<< HEAD
-
-    // The checker runs only on a complete tree: on a partial one every dropped declaration
-    // would come back as a cascade of "not declared" errors. A complete tree may still carry
-    // syntax errors that drop nothing (operators mixed without parentheses), so those and the
-    // checker's errors are reported in one run.
-    let mut checked_program = None;
-    if parsed.complete {
-        let check_options = occ_compiler::Options::from_source(text);
-        let (checked, found) = occ_compiler::check_with(&parsed.program, check_options);
-        diagnostics.extend(found.iter().map(|d| {
-            let severity = match d.severity {
-                occ_compiler::Severity::Error => Severity::Error,
-                occ_compiler::Severity::Warning => Severity::Warning,
-            };
-            located(
-                &parsed,
-                severity,
-                d.span,
-                d.message(),
-                d.label(),
-                d.kind.help(),
-            )
-        }));
-        if let Some(c) = &checked {
-            let bindings = occ_codegen::link::bind_externals(c, &intrinsics());
-            diagnostics.extend(
-                bindings
-                    .errors
-                    .into_iter()
-                    .map(|e| located(&parsed, Severity::Error, e.span, e.message, e.label, None)),
-            );
-        }
-        checked_program = checked;
-    }
-
-=======
->>>>>>> main
     diagnostics.sort_by(|a, b| (&a.file, a.line).cmp(&(&b.file, b.line)));
     let checked = Checked { diagnostics };
     let passed = front.checked.map(|checked| Front {

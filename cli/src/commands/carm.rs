@@ -175,7 +175,9 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     let (until_unshot, max_shots) = match config.until {
         Until::Unshot(f) => (f, config.max_shots),
         Until::Shots(n) => (-1.0, n.min(config.max_shots)),
-        Until::Seconds(_) => anyhow::bail!("--solver carm takes --until unshot=F or shots=N"),
+        Until::Seconds(_) | Until::Error(_) => {
+            anyhow::bail!("--solver carm takes --until unshot=F or shots=N")
+        }
     };
     let int = |n: usize, what: &str| {
         i32::try_from(n).map_err(|_| anyhow::anyhow!("{what} ({n}) is too many for carm.occ"))

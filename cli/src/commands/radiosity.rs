@@ -238,11 +238,8 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         &name,
         timings,
         probes.as_deref(),
-<<<<<<< HEAD
-        network.as_ref(),
-=======
         truth.as_ref(),
->>>>>>> main
+        network.as_ref(),
     )?;
     Ok(ExitCode::SUCCESS)
 }
@@ -411,7 +408,7 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
             "--solver carm does not subdivide yet: give --no-adapt"
         );
         anyhow::ensure!(
-            !matches!(args.until, Until::Seconds(_)),
+            matches!(args.until, Until::Unshot(_) | Until::Shots(_)),
             "--solver carm takes --until unshot=F or shots=N"
         );
     }
@@ -508,11 +505,8 @@ fn write_outputs(
     name: &str,
     timings: report::Timings,
     probes: Option<&[probe::Probe]>,
-<<<<<<< HEAD
-    network: Option<&carm::CarmReport>,
-=======
     truth: Option<&truth::Reference>,
->>>>>>> main
+    network: Option<&carm::CarmReport>,
 ) -> anyhow::Result<()> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -520,15 +514,6 @@ fn write_outputs(
         std::fs::write(out.join(file), bytes)
             .with_context(|| format!("cannot write {}", out.join(file).display()))
     };
-<<<<<<< HEAD
-    let rep = report::build(solver, name, timings);
-    // carm.occ's report: the same, with its nodes' and links' counters.
-    let mut json = serde_json::to_value(&rep)?;
-    if let Some(net) = network {
-        json["solver"] = "carm".into();
-        json["nodes"] = serde_json::to_value(&net.nodes)?;
-        json["links"] = serde_json::to_value(&net.links)?;
-=======
     let mut rep = report::build(solver, name, timings);
     if let Some(truth) = truth {
         let names: Vec<String> = solver
@@ -541,7 +526,13 @@ fn write_outputs(
         let errors = truth::object_errors(&names, &means, truth);
         print!("{}", truth::error_table(&errors));
         rep.truth = Some(errors);
->>>>>>> main
+    }
+    // carm.occ's report: the same, with its nodes' and links' counters.
+    let mut json = serde_json::to_value(&rep)?;
+    if let Some(net) = network {
+        json["solver"] = "carm".into();
+        json["nodes"] = serde_json::to_value(&net.nodes)?;
+        json["links"] = serde_json::to_value(&net.links)?;
     }
     write(
         "report.json",
