@@ -1,5 +1,6 @@
 //! One module per subcommand. Each defines `Args` (its flags) and `execute(Args)`.
 
+pub mod carm;
 pub mod check;
 pub mod radiosity;
 pub mod run;

@@ -1,6 +1,7 @@
 //! `occ radiosity`: reads the scene (or takes the embedded Cornell box), runs the reference
-//! solver and writes the outputs of ARCHITECTURE.md §7 into `--out`. All the work is in
-//! `occ-radiosity`; this module only parses flags, reads and writes files and shows progress.
+//! solver or carm.occ (`--solver carm`, [`super::carm`]) and writes the outputs of
+//! ARCHITECTURE.md §7 into `--out`. All the radiosity is in `occ-radiosity` or carm.occ; this
+//! module only parses flags, reads and writes files and shows progress.
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -15,11 +16,15 @@ use occ_radiosity::pathtrace::{PathTraceConfig, PathTracer};
 use occ_radiosity::scene::{self, Scene};
 use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
 
+use super::carm;
+
 /// Which solver to run.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum SolverKind {
     /// The sequential Rust reference solver.
     Reference,
+    /// programs/carm.occ on a ternary tree of `--nodes` simulated transputers.
+    Carm,
 }
 
 /// Flags of `occ radiosity`.
@@ -45,6 +50,12 @@ pub struct Args {
     /// Solver.
     #[arg(long, value_enum, default_value = "reference")]
     pub solver: SolverKind,
+    /// Nodes of the ternary tree carm.occ runs on (`--solver carm`).
+    #[arg(long, default_value_t = 13)]
+    pub nodes: usize,
+    /// OS threads running carm.occ's nodes (default: one per core); 1 repeats runs exactly.
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Longest patch (shooter) edge; default: scene diagonal / 4.
     #[arg(long)]
     pub patch_size: Option<f32>,
@@ -191,8 +202,30 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         );
     }
     let t3 = Instant::now();
-    progress.stage("shooting", &format!("until {:?}", args.until));
-    solve(&mut solver, &progress);
+    let network = match args.solver {
+        SolverKind::Reference => {
+            progress.stage("shooting", &format!("until {:?}", args.until));
+            solve(&mut solver, &progress);
+            None
+        }
+        SolverKind::Carm => {
+            let threads = args.threads.unwrap_or_else(|| {
+                std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+            });
+            progress.stage(
+                "shooting",
+                &format!(
+                    "carm.occ on {} nodes, {threads} threads, until {:?}",
+                    args.nodes, args.until
+                ),
+            );
+            let settings = carm::CarmSettings {
+                nodes: args.nodes,
+                threads,
+            };
+            Some(carm::solve(&mut solver, settings)?)
+        }
+    };
     let timings = report::Timings {
         load,
         mesh: mesh_time,
@@ -206,6 +239,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         timings,
         probes.as_deref(),
         truth.as_ref(),
+        network.as_ref(),
     )?;
     Ok(ExitCode::SUCCESS)
 }
@@ -367,6 +401,18 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
         args.image_size >= 8 && args.image_size <= 8192,
         "--image-size must be between 8 and 8192"
     );
+    anyhow::ensure!(args.nodes >= 1, "--nodes must be at least 1");
+    if let SolverKind::Carm = args.solver {
+        anyhow::ensure!(
+            args.no_adapt,
+            "--solver carm does not subdivide yet: give --no-adapt"
+        );
+        anyhow::ensure!(
+            matches!(args.until, Until::Unshot(_) | Until::Shots(_)),
+            "--solver carm takes --until unshot=F or shots=N"
+        );
+    }
+    anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
     for (flag, v) in [
         ("--patch-size", args.patch_size),
         ("--element-size", args.element_size),
@@ -460,6 +506,7 @@ fn write_outputs(
     timings: report::Timings,
     probes: Option<&[probe::Probe]>,
     truth: Option<&truth::Reference>,
+    network: Option<&carm::CarmReport>,
 ) -> anyhow::Result<()> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -480,9 +527,16 @@ fn write_outputs(
         print!("{}", truth::error_table(&errors));
         rep.truth = Some(errors);
     }
+    // carm.occ's report: the same, with its nodes' and links' counters.
+    let mut json = serde_json::to_value(&rep)?;
+    if let Some(net) = network {
+        json["solver"] = "carm".into();
+        json["nodes"] = serde_json::to_value(&net.nodes)?;
+        json["links"] = serde_json::to_value(&net.links)?;
+    }
     write(
         "report.json",
-        serde_json::to_string_pretty(&rep)?.as_bytes(),
+        serde_json::to_string_pretty(&json)?.as_bytes(),
     )?;
     write(
         "convergence.csv",
