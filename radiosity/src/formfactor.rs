@@ -146,7 +146,9 @@ impl SourceDensity {
         if !(mean > 0.0) || (hi - lo) as f64 <= 1e-6 * mean {
             return None;
         }
-        cells.iter_mut().for_each(|c| *c = (*c as f64 / mean) as f32);
+        cells
+            .iter_mut()
+            .for_each(|c| *c = (*c as f64 / mean) as f32);
         Some(SourceDensity { g, cells })
     }
 

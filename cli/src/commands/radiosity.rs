@@ -30,8 +30,9 @@ pub struct Args {
     /// Output folder (created if missing).
     #[arg(long, default_value = "radiosity-out")]
     pub out: PathBuf,
-    /// Stopping rule: unshot=FRACTION, shots=N or time=SECONDS.
-    #[arg(long, default_value = "unshot=0.01")]
+    /// Stopping rule: error=FRACTION (every object's mean B within it, by the solver's
+    /// estimate), unshot=FRACTION (of the emitted power), shots=N or time=SECONDS.
+    #[arg(long, default_value = "error=0.01")]
     pub until: Until,
     /// A report.json to measure the RMS error against (matched by object name).
     #[arg(long)]
@@ -86,6 +87,9 @@ pub struct Args {
     /// Path tracer: paths per object and per probe (the standard error falls as 1/sqrt).
     #[arg(long, default_value_t = 65_536)]
     pub pt_samples: u64,
+    /// Path tracer: most bounces a path makes (1: direct light only).
+    #[arg(long, default_value_t = 1000)]
+    pub pt_max_bounces: u32,
 }
 
 /// Most elements `occ radiosity` will mesh a scene into (a few hundred bytes each, with their
@@ -172,7 +176,14 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         octree: octree_time,
         solve: t3.elapsed().as_secs_f64(),
     };
-    write_outputs(&args, &solver, &name, timings, probes.as_deref(), truth.as_ref())?;
+    write_outputs(
+        &args,
+        &solver,
+        &name,
+        timings,
+        probes.as_deref(),
+        truth.as_ref(),
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -187,14 +198,18 @@ fn path_trace(
     let config = PathTraceConfig {
         samples: args.pt_samples,
         seed: args.seed,
-        ..PathTraceConfig::default()
+        max_bounces: args.pt_max_bounces,
     };
     let start = Instant::now();
     let tracer = PathTracer::new(scene);
     let means = tracer.object_means(&config);
     let at_probes = tracer.probes(probes, &config);
     let seconds = start.elapsed().as_secs_f64();
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    // The program's own path says nothing about the run; the arguments do.
+    let command = std::iter::once("occ".to_string())
+        .chain(std::env::args().skip(1))
+        .collect::<Vec<_>>()
+        .join(" ");
     let pairs: Vec<_> = probes.iter().copied().zip(at_probes).collect();
     let reference =
         truth::Reference::new((name, scene), &command, &config, seconds, &means, &pairs);
@@ -207,7 +222,13 @@ fn path_trace(
         let rel = |c: usize| 100.0 * o.std_err[c] / o.mean_b[c].max(f64::MIN_POSITIVE);
         println!(
             "{:<24} B = {:9.5} {:9.5} {:9.5}   std err {:.2}% {:.2}% {:.2}%",
-            o.name, o.mean_b[0], o.mean_b[1], o.mean_b[2], rel(0), rel(1), rel(2)
+            o.name,
+            o.mean_b[0],
+            o.mean_b[1],
+            o.mean_b[2],
+            rel(0),
+            rel(1),
+            rel(2)
         );
     }
     println!(
@@ -326,7 +347,12 @@ fn write_outputs(
     };
     let mut rep = report::build(solver, name, timings);
     if let Some(truth) = truth {
-        let names: Vec<String> = solver.scene.objects.iter().map(|o| o.name.clone()).collect();
+        let names: Vec<String> = solver
+            .scene
+            .objects
+            .iter()
+            .map(|o| o.name.clone())
+            .collect();
         let means: Vec<_> = solver.object_means().into_iter().map(|(_, b)| b).collect();
         let errors = truth::object_errors(&names, &means, truth);
         print!("{}", truth::error_table(&errors));
