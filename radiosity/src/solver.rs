@@ -528,7 +528,6 @@ impl<'a> Solver<'a> {
         self.element_unshot.resize(n, DVec3::ZERO);
         for (k, &t) in shrunk.iter().enumerate() {
             let (t, half) = (t as usize, before + k);
-            let old = self.element_area[t];
             let area = |i: usize| self.mesh.tri(&self.mesh.elements[i]).area() as f64;
             let (a, b) = (area(t), area(half));
             let unshot = self.element_unshot[t];
@@ -537,7 +536,6 @@ impl<'a> Solver<'a> {
             self.element_unshot[t] = unshot * (1.0 - share);
             self.element_area[t] = a;
             self.element_area[half] = b;
-            debug_assert!((a + b - old).abs() <= 1e-3 * old.max(1e-30));
         }
     }
 
