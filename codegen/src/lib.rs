@@ -16,11 +16,12 @@ pub mod layout;
 pub mod link;
 pub mod lower;
 pub mod native;
+pub mod network;
 
 use std::sync::Arc;
 
 use occ_compiler::CheckedProgram;
-use occ_compiler::types::{ChanProtocol, Prim, ProtocolItem, Type};
+use occ_compiler::types::Type;
 use occ_grammar::ast::{self, DeclKind};
 use occ_grammar::source_map::SourceMap;
 use occ_runtime::abi::{ProcFn, Word};
@@ -43,6 +44,10 @@ pub struct Compiled {
     pub entry_words: u32,
     /// Byte offsets of the entry PROC's channel parameters in its frame.
     pub entry_params: Vec<i32>,
+    /// Every parameter of the entry PROC: byte offset, passed by value, type.
+    pub entry_param_slots: Vec<(i32, bool, Type)>,
+    /// The network its `PLACED PAR` configures, if any.
+    pub network: Option<network::NetworkLayout>,
     /// Tables for error and deadlock reports.
     pub info: Arc<ProgramInfo>,
 }
@@ -109,7 +114,10 @@ pub fn compile_with(
     let Some(Storage::Proc(e)) = cx.env.get(&sym).cloned() else {
         return Err(CodegenError::NoEntry);
     };
-    if e.params.len() > 3 || !e.param_types.iter().all(is_byte_chan) {
+    let host_entry = e.params.len() <= 3 && e.param_types.iter().all(network::is_byte_chan);
+    let node_entry = e.param_types.len() >= 4
+        && matches!(e.param_types[2], Type::Array(None, ref t) if matches!(**t, Type::Chan(..)));
+    if !host_entry && !node_entry {
         return Err(CodegenError::BadEntry(name.text.clone()));
     }
     cx.jit.finalize()?;
@@ -126,29 +134,38 @@ pub fn compile_with(
     let code = cx.jit.module.get_finalized_function(e.id);
     // SAFETY: as above.
     let entry_fn: ProcFn = unsafe { std::mem::transmute::<*const u8, ProcFn>(code) };
-    let Compiler { jit, data, .. } = cx;
+    let Compiler {
+        jit, data, network, ..
+    } = cx;
     Ok(Compiled {
         module: Some(jit.module),
         _data: data,
         entry: entry_fn,
         entry_name: name.text.clone(),
         entry_words: e.frame_words,
-        entry_params: e.params.iter().map(|p| p.0).collect(),
+        entry_params: if host_entry {
+            e.params.iter().map(|p| p.0).collect()
+        } else {
+            Vec::new()
+        },
+        entry_param_slots: e
+            .params
+            .iter()
+            .zip(&e.param_types)
+            .map(|(&(off, by_value), t)| (off, by_value, t.clone()))
+            .collect(),
+        network,
         info: Arc::new(info),
     })
 }
 
-fn is_byte_chan(t: &Type) -> bool {
-    match t {
-        Type::Chan(p, _) => matches!(
-            **p,
-            ChanProtocol::Simple(ProtocolItem::Data(Type::Prim(Prim::Byte))) | ChanProtocol::Any
-        ),
-        _ => false,
-    }
-}
-
 impl Compiled {
+    /// Whether the entry PROC is a node program for [`Compiled::run_topology`] rather than a
+    /// program of the host's three byte channels.
+    pub fn is_node_program(&self) -> bool {
+        self.network.is_none() && self.entry_params.len() < self.entry_param_slots.len()
+    }
+
     /// Runs the entry PROC on a new node with `host` bound to its channels; returns the outcome
     /// and the node's counters.
     pub fn run(&self, config: NodeConfig, host: HostIo) -> (Result<(), RunError>, Stats) {

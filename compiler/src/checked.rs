@@ -120,4 +120,6 @@ pub struct CheckedProgram {
     pub expr_types: FxHashMap<Span, Type>,
     /// Constant values, by expression span.
     pub constants: FxHashMap<Span, Value>,
+    /// The network configured by the last PROC's `PLACED PAR`, if it has one.
+    pub network: Option<crate::network::Network>,
 }

@@ -170,6 +170,14 @@ pub enum DiagnosticKind {
         /// The protocol.
         protocol: String,
     },
+    /// Occurs when a network configuration (`PLACED PAR` / `PROCESSOR`) cannot be built.
+    /// Example: a PROCESSOR with channels to five others.
+    Network {
+        /// What is wrong, naming the processors and channels.
+        what: String,
+        /// How to fix it.
+        help: &'static str,
+    },
     /// Occurs when a constant subscript is outside the array. Example: `[4]INT a:` then `a[4]`.
     OutOfBounds {
         /// The subscript.
@@ -241,6 +249,7 @@ impl DiagnosticKind {
             OutOfBounds { index, len } => {
                 format!("subscript {index} is out of range for an array of {len} elements")
             }
+            Network { what, .. } => what.clone(),
         }
     }
 
@@ -282,6 +291,7 @@ impl DiagnosticKind {
             NotAssignable { name } => Some(format!(
                 "declare `{name}` as a variable (`INT {name}:`) rather than a VAL"
             )),
+            Network { help, .. } => Some((*help).into()),
             _ => None,
         }
     }

@@ -33,6 +33,7 @@ pub mod consteval;
 pub mod diagnostic;
 pub mod entity;
 mod fxhash;
+pub mod network;
 pub mod predefined;
 pub mod types;
 pub mod usage;
@@ -56,7 +57,13 @@ pub fn check_with(
     program: &occ_grammar::ast::Program,
     options: Options,
 ) -> (Option<CheckedProgram>, Vec<Diagnostic>) {
-    let (checked, diags) = check::run(program, options);
-    let ok = diags.iter().all(|d| d.severity != Severity::Error);
+    let (mut checked, mut diags) = check::run(program, options);
+    let mut ok = diags.iter().all(|d| d.severity != Severity::Error);
+    if ok {
+        let (network, more) = network::configure(program, &checked);
+        ok = more.is_empty();
+        checked.network = network;
+        diags.extend(more);
+    }
     (ok.then_some(checked), diags)
 }

@@ -309,6 +309,7 @@ use crate::alt::{
 use crate::chan::{rt_in, rt_out, rt_preempt};
 use crate::error::rt_error;
 use crate::par::{rt_endp, rt_par_wait, rt_startp, rt_startp_pri, rt_stopp};
+use crate::placement::rt_placement;
 use crate::sched::{rt_reschedule, rt_timeslice};
 use crate::timer::{rt_timer_read, rt_tin};
 
@@ -353,6 +354,7 @@ pub static ABI_TABLE: &[AbiEntry] = &[
     entry!(rt_dist, false, [Ptr, Ptr, W, W, W], Some(W)),
     entry!(rt_altend, false, [Ptr, Ptr], Some(W)),
     entry!(rt_error, true, [Ptr, Ptr, W, W], Some(St)),
+    entry!(rt_placement, false, [Ptr, Ptr], Some(W)),
 ];
 
 /// Finds an entry of [`ABI_TABLE`] by name.

@@ -42,13 +42,15 @@ pub enum ErrorKind {
     MessageLength = 10,
     /// Occurs when a host or intrinsic operation fails (for example writing stdout).
     Host = 11,
+    /// Occurs on every other node of a network when one node halts: the network stops.
+    Stopped = 12,
 }
 
 impl ErrorKind {
     /// The kind with code `code`.
     pub fn from_code(code: Word) -> Option<ErrorKind> {
         use ErrorKind::*;
-        const ALL: [ErrorKind; 12] = [
+        const ALL: [ErrorKind; 13] = [
             Stop,
             IfNoBranch,
             CaseNoMatch,
@@ -61,6 +63,7 @@ impl ErrorKind {
             Assert,
             MessageLength,
             Host,
+            Stopped,
         ];
         usize::try_from(code).ok().and_then(|i| ALL.get(i).copied())
     }
@@ -82,6 +85,7 @@ impl ErrorKind {
             ErrorKind::Assert => "ASSERT failed",
             ErrorKind::MessageLength => "message length mismatch",
             ErrorKind::Host => "host I/O failed",
+            ErrorKind::Stopped => "stopped because another node of the network failed",
         }
     }
 }
@@ -126,7 +130,9 @@ pub enum RunError {
     #[error("{0}")]
     Deadlock(DeadlockReport),
     /// Occurs when a workspace allocation would exceed the node's memory budget.
-    #[error("out of memory: {requested} bytes requested, budget {budget} bytes")]
+    #[error(
+        "out of memory: {requested} bytes of workspace requested, over the node's budget of {budget} bytes"
+    )]
     OutOfMemory {
         /// Bytes asked for.
         requested: usize,

@@ -22,6 +22,8 @@ pub(crate) enum Engine {
     LinkOut(LinkEnd),
     /// The receiving end of a link.
     LinkIn(LinkEnd),
+    /// A link (or host channel) that nothing is connected to: communication waits for ever.
+    Unconnected,
 }
 
 /// An external endpoint and the channel word that designates it.
@@ -100,6 +102,7 @@ impl Node {
                     self.host_result(ws, r)
                 }
                 Engine::LinkIn(end) => self.link_in(end, ws, chan as Word, data, len),
+                Engine::Unconnected => self.wait_forever(ws, chan as Word),
                 _ => self.protocol_error(ws),
             }
         }
@@ -131,6 +134,7 @@ impl Node {
                 Engine::LinkOut(end) => {
                     self.link_out(end, ws, chan as Word | wait::OUTPUT, data, len)
                 }
+                Engine::Unconnected => self.wait_forever(ws, chan as Word | wait::OUTPUT),
                 _ => self.protocol_error(ws),
             }
         }
@@ -176,6 +180,14 @@ impl Node {
             // SAFETY: `ws` is the running frame.
             Err(_) => unsafe { crate::error::rt_error(self, ws, ErrorKind::Host as Word, -1) },
         }
+    }
+
+    /// Blocks the running process on an unconnected channel: nothing will ever wake it, so it
+    /// shows in the node's deadlock report.
+    fn wait_forever(&mut self, ws: Wptr, what: Word) -> Status {
+        // SAFETY: `ws` is the running frame.
+        unsafe { self.note_blocked(ws, what) };
+        Status::BLOCKED
     }
 
     fn protocol_error(&mut self, ws: Wptr) -> Status {

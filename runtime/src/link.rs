@@ -17,9 +17,9 @@
 //! every node is idle (or finished) and no mail is in flight, no link can move and each waiting
 //! node reports a deadlock instead of waiting for ever.
 
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering::SeqCst};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering::SeqCst};
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use crate::abi::{Status, Word, Wptr, tag};
 use crate::chan::copy;
@@ -42,6 +42,10 @@ const IDLE_POLL: Duration = Duration::from_millis(2);
 pub(crate) struct NetState {
     nodes: AtomicUsize,
     state: AtomicU64,
+    /// Set when a node halts: every other node stops at its next timeslice or wait.
+    stopped: AtomicBool,
+    /// Every link direction, in the order connected, for statistics.
+    links: Mutex<Vec<Arc<LinkShared>>>,
 }
 
 /// One idle node in [`NetState::state`].
@@ -56,6 +60,16 @@ impl NetState {
 
     fn sub(&self, v: u64) {
         self.state.fetch_sub(v, SeqCst);
+    }
+
+    /// Stops the network (a node has halted).
+    pub(crate) fn stop(&self) {
+        self.stopped.store(true, SeqCst);
+    }
+
+    /// Whether the network has been stopped.
+    pub(crate) fn is_stopped(&self) -> bool {
+        self.stopped.load(SeqCst)
     }
 
     /// Whether every node is idle or finished and no mail is in flight.
@@ -78,6 +92,8 @@ struct Party {
     data: usize,
     len: Word,
     mailbox: Arc<Mailbox>,
+    /// When it blocked, for [`LinkStats`].
+    since: Instant,
 }
 
 #[derive(Debug, Default)]
@@ -85,6 +101,22 @@ struct LinkState {
     writer: Option<Party>,
     reader: Option<Party>,
     alt: Option<(Word, Arc<Mailbox>)>,
+    stats: LinkStats,
+}
+
+/// Traffic of one link direction.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LinkStats {
+    /// The link's name (the channel it carries).
+    pub name: String,
+    /// Messages carried.
+    pub messages: u64,
+    /// Bytes carried.
+    pub bytes: u64,
+    /// Time the outputting process spent blocked waiting for the inputter.
+    pub writer_blocked: Duration,
+    /// Time the inputting process spent blocked waiting for the outputter.
+    pub reader_blocked: Duration,
 }
 
 /// The shared state of one link direction.
@@ -146,9 +178,16 @@ impl Network {
     /// `from` to output to, and the one on `to` to input from.
     pub fn connect(&self, from: &mut Node, to: &mut Node, name: &str) -> (*mut Word, *mut Word) {
         let shared = Arc::new(LinkShared {
-            state: Mutex::new(LinkState::default()),
+            state: Mutex::new(LinkState {
+                stats: LinkStats {
+                    name: name.to_string(),
+                    ..LinkStats::default()
+                },
+                ..LinkState::default()
+            }),
             net: self.state.clone(),
         });
+        lock(&self.state.links).push(shared.clone());
         let out = LinkEnd {
             shared: shared.clone(),
         };
@@ -157,6 +196,33 @@ impl Network {
             from.add_external(Engine::LinkOut(out), &format!("{name} (link out)")),
             to.add_external(Engine::LinkIn(inp), &format!("{name} (link in)")),
         )
+    }
+}
+
+/// Locks `m`, whatever a panicking holder left.
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+impl Network {
+    /// The traffic of every link direction, in the order connected.
+    pub fn link_stats(&self) -> Vec<LinkStats> {
+        lock(&self.state.links)
+            .iter()
+            .map(|l| lock(&l.state).stats.clone())
+            .collect()
+    }
+
+    /// Whether a node halted and stopped the network.
+    pub fn stopped(&self) -> bool {
+        self.state.is_stopped()
+    }
+
+    /// A channel word on `node` that no link stands behind: a process that inputs or outputs
+    /// on it waits for ever (and is named `name` in deadlock reports); an ALT guard on it is
+    /// never ready.
+    pub fn unconnected(node: &mut Node, name: &str) -> *mut Word {
+        node.add_external(Engine::Unconnected, name)
     }
 }
 
@@ -198,10 +264,11 @@ impl Node {
     ) -> Status {
         let mut st = end.lock();
         if let Some(r) = st.reader.take() {
+            st.stats.reader_blocked += r.since.elapsed();
             // SAFETY: the reader is blocked; its buffer is valid for `r.len` bytes while it is
             // registered, and the lock (held until the copy and the post are done) keeps its
             // node from withdrawing and freeing it meanwhile.
-            return unsafe { self.link_complete(end, ws, r, data, len, true) };
+            return unsafe { self.link_complete(end, &mut st, ws, r, data, len, true) };
         }
         st.writer = Some(self.party(ws, data, len));
         if let Some((alter, mailbox)) = st.alt.take() {
@@ -228,8 +295,9 @@ impl Node {
     ) -> Status {
         let mut st = end.lock();
         if let Some(w) = st.writer.take() {
+            st.stats.writer_blocked += w.since.elapsed();
             // SAFETY: as in `link_out`, with the roles swapped.
-            return unsafe { self.link_complete(end, ws, w, data, len, false) };
+            return unsafe { self.link_complete(end, &mut st, ws, w, data, len, false) };
         }
         st.reader = Some(self.party(ws, data, len));
         drop(st);
@@ -245,6 +313,7 @@ impl Node {
             data: data as usize,
             len,
             mailbox: self.mailbox.clone(),
+            since: Instant::now(),
         }
     }
 
@@ -252,9 +321,11 @@ impl Node {
     ///
     /// # Safety
     /// `other` is blocked with a buffer of `other.len` bytes; `mine` is ours, `len` bytes.
+    #[allow(clippy::too_many_arguments, reason = "one communication's whole state")]
     unsafe fn link_complete(
         &mut self,
         end: &LinkEnd,
+        st: &mut LinkState,
         ws: Wptr,
         other: Party,
         mine: *mut u8,
@@ -276,6 +347,8 @@ impl Node {
             }
         }
         end.post(&other.mailbox, other.desc);
+        st.stats.messages += 1;
+        st.stats.bytes += len as u64;
         self.stats.communications += 1;
         Status::DONE
     }
@@ -359,6 +432,10 @@ impl Node {
         }
         net.add(IDLE);
         while !self.mailbox.wait(IDLE_POLL) {
+            if net.is_stopped() {
+                net.sub(IDLE);
+                return Err(RunError::Halted(self.stopped_halt()));
+            }
             if net.deadlocked() {
                 // `run` calls `leave_network`, which counts this node idle for good.
                 net.sub(IDLE);
@@ -388,5 +465,29 @@ impl Node {
         let discarded = self.mailbox.take_all().len();
         net.sub(MAIL * discarded as u64);
         net.add(IDLE);
+    }
+}
+
+impl Node {
+    /// Whether this node's network has been stopped by a halting node.
+    pub(crate) fn network_stopped(&self) -> bool {
+        self.net.as_ref().is_some_and(|n| n.is_stopped())
+    }
+
+    /// Stops this node's network (it has halted).
+    pub(crate) fn stop_network(&self) {
+        if let Some(n) = &self.net {
+            n.stop();
+        }
+    }
+
+    /// The halt of a node stopped because another node failed.
+    pub(crate) fn stopped_halt(&self) -> crate::error::Halt {
+        crate::error::Halt {
+            kind: Some(ErrorKind::Stopped),
+            code: ErrorKind::Stopped as Word,
+            location: None,
+            proc_name: None,
+        }
     }
 }

@@ -25,6 +25,12 @@ pub struct NodeConfig {
     pub memory_budget: usize,
     /// Whether low-priority processes are timesliced (a shared 1 ms ticker sets the yield flag).
     pub timeslice: bool,
+    /// Timeslice by count instead of by clock: every this many loop back-edges of a
+    /// low-priority process is a timeslice, so runs repeat exactly (`occ run --threads 1`).
+    /// Takes precedence over `timeslice`.
+    pub counted_slices: Option<u32>,
+    /// The node's name in reports (`node 3`); empty for a lone node.
+    pub name: String,
 }
 
 impl Default for NodeConfig {
@@ -33,6 +39,8 @@ impl Default for NodeConfig {
         NodeConfig {
             memory_budget: 256 << 20,
             timeslice: true,
+            counted_slices: None,
+            name: String::new(),
         }
     }
 }
@@ -82,6 +90,18 @@ pub struct Node {
     /// Whether this node already counts as idle for good in its network.
     pub(crate) net_finished: bool,
     pub(crate) config: NodeConfig,
+    /// What the program's `PLACED PAR` binds on this node (see [`crate::placement`]).
+    pub(crate) placement: Option<crate::placement::Placement>,
+    /// Timeslices taken since the node last had its turn on a pool thread.
+    pub(crate) slices: u32,
+    /// Back-edge polls since the last counted timeslice.
+    pub(crate) polls: u32,
+    /// Set by a timeslice when the node has had its turn: the pool gives the thread to another.
+    pub(crate) give_way: bool,
+    /// Whether a thread pool runs the node (so it gives way after [`crate::pool::TURN_SLICES`]).
+    pub(crate) pooled: bool,
+    /// Time spent running processes (the pool measures each turn).
+    pub(crate) busy: std::time::Duration,
 }
 
 // SAFETY: a Node's raw pointers all point into its own arena or into workspaces it owns; they are
@@ -113,6 +133,12 @@ impl Node {
             net: None,
             net_finished: false,
             config,
+            placement: None,
+            slices: 0,
+            polls: 0,
+            give_way: false,
+            pooled: false,
+            busy: std::time::Duration::ZERO,
         })
     }
 
@@ -201,10 +227,14 @@ impl Node {
     /// deadlocks. Host output is flushed in every case.
     pub fn run(&mut self) -> Result<(), RunError> {
         let ticket = self
-            .config
-            .timeslice
+            .clock_slices()
             .then(|| crate::ticker::register(&self.yield_flag));
         let result = self.run_loop();
+        if let Err(RunError::Halted(h)) = &result
+            && h.kind != Some(crate::ErrorKind::Stopped)
+        {
+            self.stop_network();
+        }
         drop(ticket);
         self.leave_network();
         let flushed = self.host.flush();
@@ -215,6 +245,27 @@ impl Node {
     /// The node's counters.
     pub fn stats(&self) -> &Stats {
         &self.stats
+    }
+
+    /// The node's settings.
+    pub fn config(&self) -> &NodeConfig {
+        &self.config
+    }
+
+    /// Time spent running processes while a thread pool ran the node.
+    pub fn busy(&self) -> std::time::Duration {
+        self.busy
+    }
+
+    /// Whether the shared clock ticker timeslices this node.
+    pub(crate) fn clock_slices(&self) -> bool {
+        self.config.timeslice && self.config.counted_slices.is_none()
+    }
+
+    /// The yield flag's resting value: held at 1 when timeslicing by count, so that every
+    /// back-edge poll reaches `rt_timeslice`, which counts.
+    pub(crate) fn flag_rest(&self) -> u32 {
+        u32::from(self.config.counted_slices.is_some())
     }
 
     /// The program tables used in reports.

@@ -10,6 +10,7 @@
 //! mailbox, and a poster pushes the mail before calling the waker, which takes the same lock.
 
 use std::collections::VecDeque;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
@@ -36,10 +37,16 @@ struct PoolState {
     running: usize,
 }
 
+/// Timeslices a node runs on a pool thread before it gives way to another ready node.
+pub(crate) const TURN_SLICES: u32 = 4;
+
 /// What nodes' mailboxes and workers share.
 pub(crate) struct PoolShared {
     state: Mutex<PoolState>,
     work: Condvar,
+    /// Each node's yield flag (nodes are boxed, so the addresses are stable): set on all of them
+    /// when a node halts, so that running nodes reach a timeslice and stop.
+    flags: Vec<usize>,
 }
 
 impl PoolShared {
@@ -82,18 +89,24 @@ impl Network {
                 running: 0,
             }),
             work: Condvar::new(),
+            flags: nodes
+                .iter()
+                .map(|n| n.yield_flag.as_ptr() as usize)
+                .collect(),
         });
         let mut tickets = Vec::new();
         {
             let mut st = pool.lock();
-            for (i, node) in nodes.into_iter().enumerate() {
+            for (i, mut node) in nodes.into_iter().enumerate() {
                 node.mailbox.set_waker(Waker {
                     pool: pool.clone(),
                     index: i,
                 });
-                if node.config.timeslice {
+                if node.clock_slices() {
                     tickets.push(crate::ticker::register(&node.yield_flag));
                 }
+                node.pooled = true;
+                node.yield_flag.store(node.flag_rest(), Ordering::Relaxed);
                 st.slots.push(Slot::Ready(node));
             }
         }
@@ -128,9 +141,29 @@ fn worker(pool: &PoolShared) {
             };
             st.running += 1;
             drop(st);
-            let outcome = node.run_until_idle();
+            let outcome = if node.network_stopped() {
+                Err(RunError::Halted(node.stopped_halt()))
+            } else {
+                let start = Instant::now();
+                let r = node.run_until_idle();
+                node.busy += start.elapsed();
+                r
+            };
+            if let Err(RunError::Halted(h)) = &outcome
+                && h.kind != Some(crate::ErrorKind::Stopped)
+            {
+                node.stop_network();
+                for &f in &pool.flags {
+                    // SAFETY: every node of the pool is alive (boxed, owned by a slot or a
+                    // worker) until `run_pool` returns.
+                    unsafe { (*(f as *const AtomicU32)).store(1, Ordering::Relaxed) };
+                }
+            }
             st = pool.lock();
             st.running -= 1;
+            if node.network_stopped() {
+                stop_parked(&mut st);
+            }
             settle(&mut st, i, node, outcome);
             pool.work.notify_all();
             continue;
@@ -182,6 +215,10 @@ fn settle(st: &mut PoolState, i: usize, node: Box<Node>, outcome: Result<Idle, R
                 Slot::Parked(node, timer.map(|d| Instant::now() + d))
             }
         }
+        Ok(Idle::Preempted) => {
+            st.ready.push_back(i);
+            Slot::Ready(node)
+        }
         Ok(Idle::Finished) => finish(node, Ok(())),
         Err(e) => finish(node, Err(e)),
     };
@@ -212,6 +249,19 @@ fn wake_due_timers(st: &mut PoolState) {
             };
             st.slots[i] = Slot::Ready(node);
             st.ready.push_back(i);
+        }
+    }
+}
+
+/// The network has stopped: every parked node stops too.
+fn stop_parked(st: &mut PoolState) {
+    for slot in st.slots.iter_mut() {
+        if let Slot::Parked(..) = slot {
+            let Slot::Parked(node, _) = std::mem::replace(slot, Slot::Running) else {
+                unreachable!("checked above");
+            };
+            let halt = RunError::Halted(node.stopped_halt());
+            *slot = finish(node, Err(halt));
         }
     }
 }

@@ -15,7 +15,7 @@
 use std::sync::atomic::Ordering;
 
 use crate::abi::{NOT_PROCESS, ProcFn, Status, Word, Wptr, priority, slot};
-use crate::error::RunError;
+use crate::error::{ErrorKind, RunError};
 use crate::frame::{get, pri, set, wptr};
 use crate::node::Node;
 
@@ -32,6 +32,8 @@ pub enum Idle {
         /// Time until the earliest timer, if any is pending.
         timer: Option<std::time::Duration>,
     },
+    /// The node has had its turn on a pool thread and gives way; processes remain runnable.
+    Preempted,
 }
 
 impl Node {
@@ -148,7 +150,7 @@ impl Node {
             return Some(ws);
         }
         self.cur_pri = priority::LOW;
-        self.yield_flag.store(0, Ordering::Relaxed);
+        self.yield_flag.store(self.flag_rest(), Ordering::Relaxed);
         if !self.interrupted.is_null() {
             return Some(std::mem::replace(
                 &mut self.interrupted,
@@ -175,6 +177,7 @@ impl Node {
         loop {
             match self.run_until_idle()? {
                 Idle::Finished => return Ok(()),
+                Idle::Preempted => {}
                 Idle::Waiting { timer } => self.wait_for_events(timer)?,
             }
         }
@@ -190,6 +193,11 @@ impl Node {
         loop {
             while let Some(ws) = self.next_frame() {
                 self.dispatch(ws)?;
+                if self.give_way {
+                    self.give_way = false;
+                    self.slices = 0;
+                    return Ok(Idle::Preempted);
+                }
             }
             self.poll_events();
             if !self.queues[0].front.is_null() || !self.queues[1].front.is_null() {
@@ -274,9 +282,13 @@ impl Node {
 
 /// Back-edge poll target, called when the yield flag is set.
 ///
-/// Clears the flag. At high priority: `DONE` (high processes are never timesliced). At low
-/// priority: preempted into the interrupted slot if a high process is ready; put at the back of
-/// the low queue if anything else could run; otherwise `DONE`.
+/// Resets the flag. At high priority: `DONE` (high processes are never timesliced). At low
+/// priority: preempted into the interrupted slot if a high process is ready; when a thread pool
+/// runs the node and it has had its turn ([`crate::pool::TURN_SLICES`] timeslices), put at the
+/// back of the low queue with the node giving way; put at the back of the low queue if anything
+/// else could run; otherwise `DONE`. When timeslicing by count, only every
+/// [`crate::NodeConfig::counted_slices`]-th call is a timeslice (the others only check for a
+/// ready high process). A node whose network has stopped halts here.
 ///
 /// # Safety
 /// `node` is the running node and `ws` the calling frame, its `IPTR` holding the loop-head index.
@@ -284,15 +296,35 @@ impl Node {
 pub unsafe extern "C" fn rt_timeslice(node: *mut Node, ws: Wptr) -> Status {
     // SAFETY: the caller passes the running node.
     let node = unsafe { &mut *node };
-    // Clearing the flag is safe at either priority: at high priority it can only hold a tick
+    // Resetting the flag is safe at either priority: at high priority it can only hold a tick
     // (nothing preempts high), and a low process is re-flagged at the next tick.
-    node.yield_flag.store(0, Ordering::Relaxed);
+    node.yield_flag.store(node.flag_rest(), Ordering::Relaxed);
     if node.cur_pri == priority::HIGH {
         return Status::DONE;
+    }
+    if let Some(every) = node.config.counted_slices {
+        node.polls += 1;
+        if node.polls < every {
+            return node.continue_or_preempt(ws);
+        }
+        node.polls = 0;
+    }
+    if node.network_stopped() {
+        // SAFETY: `ws` is the running frame.
+        return unsafe { crate::error::rt_error(node, ws, ErrorKind::Stopped as Word, -1) };
     }
     node.poll_events();
     if node.continue_or_preempt(ws) == Status::BLOCKED {
         return Status::BLOCKED;
+    }
+    if node.pooled {
+        node.slices += 1;
+        if node.slices >= crate::pool::TURN_SLICES {
+            node.give_way = true;
+            // SAFETY: `ws` is the running frame, on no queue.
+            unsafe { node.enqueue(ws, priority::LOW) };
+            return Status::BLOCKED;
+        }
     }
     if node.queues[1].front.is_null() {
         return Status::DONE;

@@ -36,6 +36,7 @@ const TIME_LIMIT: std::time::Duration = std::time::Duration::from_secs(20);
 pub fn run_program(
     path: &Path,
     include_dirs: &[std::path::PathBuf],
+    args: &[String],
     stdin: &str,
 ) -> Result<Execution, Unavailable> {
     use std::io::{Read, Write};
@@ -46,6 +47,7 @@ pub fn run_program(
     for d in include_dirs {
         cmd.arg("-I").arg(d);
     }
+    cmd.args(args);
     let mut child = cmd
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())

@@ -80,6 +80,8 @@ pub struct Expectation {
     pub deadlock: Vec<String>,
     /// `-- include:` folders, as written (relative to the test file's folder).
     pub includes: Vec<PathBuf>,
+    /// `-- args:` words passed to `occ run` after the file (`--topology ring:13 --threads 1`).
+    pub args: Vec<String>,
 }
 
 /// Why a file's expectation comments cannot be understood.
@@ -145,10 +147,11 @@ impl fmt::Display for ExpectError {
 }
 
 /// The marker keys the harness understands, longest first so that `runtime-error` wins over `error`.
-const KEYS: [&str; 8] = [
+const KEYS: [&str; 9] = [
     "runtime-error",
     "deadlock",
     "include",
+    "args",
     "stdout",
     "stdin",
     "error",
@@ -217,6 +220,7 @@ pub fn parse(source: &str) -> Result<Expectation, ExpectError> {
         runtime_error: None,
         deadlock: Vec::new(),
         includes: Vec::new(),
+        args: Vec::new(),
     };
     let mut runtime_errors = Vec::new();
     for marker in markers.iter().filter(|m| m.key != "test") {
@@ -244,7 +248,7 @@ fn header(markers: &[Marker<'_>]) -> Result<Kind, ExpectError> {
 fn allowed(marker: &Marker<'_>, kind: Kind) -> Result<(), ExpectError> {
     let fits = match marker.key {
         "error" => kind == Kind::Error,
-        "stdout" | "stdin" | "exit" => kind.runs(),
+        "stdout" | "stdin" | "exit" | "args" => kind.runs(),
         "runtime-error" => kind == Kind::RuntimeError,
         "deadlock" => kind == Kind::Deadlock,
         _ => true,
@@ -280,6 +284,9 @@ fn apply(
         "stdin" => expectation.stdin.push(verbatim(marker.value)),
         "deadlock" => expectation.deadlock.push(required(marker)?),
         "include" => expectation.includes.push(PathBuf::from(required(marker)?)),
+        "args" => expectation
+            .args
+            .extend(required(marker)?.split_whitespace().map(str::to_string)),
         "exit" => {
             let text = marker.value.trim();
             expectation.exit = text.parse().map_err(|_| ExpectError::BadExit {

@@ -143,7 +143,7 @@ fn judge_file(path: &Path, source: &str, expectation: &Expectation, config: &Con
         return verdict;
     }
     let stdin = input_text(&expectation.stdin);
-    match execute::run_program(path, &include_dirs, &stdin) {
+    match execute::run_program(path, &include_dirs, &expectation.args, &stdin) {
         Err(execute::Unavailable) => Verdict::Skip(SKIP_REASON),
         Ok(run) => {
             if config.bless && expectation.kind == Kind::Run {

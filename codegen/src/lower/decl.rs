@@ -72,7 +72,18 @@ impl Tr<'_, '_> {
                     .insert(sym, Storage::Function(std::rc::Rc::new(d.clone())));
                 Ok(())
             }
-            DeclKind::Place { .. } => Err(self.cx.unsupported(d.span, "PLACE")),
+            // A channel placed at a link address (`PLACE c AT 4:`), as Inmos configurations
+            // write it: the network's links come from which processors use the channel, so
+            // the address adds nothing. Placing data at a memory address is not supported.
+            DeclKind::Place { name, .. } => {
+                let sym = self.cx.symbol(name)?;
+                let ty = &self.cx.checked.symbols[sym].ty;
+                if matches!(crate::layout::base_elem(ty), Type::Chan(..)) {
+                    Ok(())
+                } else {
+                    Err(self.cx.unsupported(d.span, "PLACE of data at an address"))
+                }
+            }
             DeclKind::Asm(_) => Err(self.cx.unsupported(d.span, "ASM / GUY blocks")),
             DeclKind::PlaceIn { .. } => Ok(()),
             #[allow(unreachable_patterns)]

@@ -123,6 +123,8 @@ pub struct Compiler<'p> {
     pub proc_name: String,
     /// Each `#PRAGMA EXTERNAL` routine's intrinsic (see [`crate::link`]).
     pub externals: HashMap<SymbolId, &'static occ_runtime::intrinsic::Intrinsic>,
+    /// The network layout, once the `PLACED PAR` is compiled.
+    pub network: Option<crate::network::NetworkLayout>,
     locations: HashMap<(usize, usize), u32>,
 }
 
@@ -156,6 +158,7 @@ impl<'p> Compiler<'p> {
             funcs: Vec::new(),
             proc_name: String::new(),
             locations: HashMap::new(),
+            network: None,
         })
     }
 

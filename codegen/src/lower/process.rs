@@ -63,6 +63,7 @@ impl Tr<'_, '_> {
             ProcessKind::While { cond, body } => self.while_loop(cond, body, p.span),
             ProcessKind::Case { selector, options } => self.case(selector, options, p.span),
             ProcessKind::Call { name, args } => self.call_proc(name, args, p.span),
+            ProcessKind::Par { placed: true, .. } => self.placed_par(p),
             ProcessKind::Par {
                 pri, repl, body, ..
             } => self.par(*pri, repl.as_deref(), body, p.span),

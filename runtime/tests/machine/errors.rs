@@ -62,7 +62,8 @@ fn every_error_kind_has_a_code_and_message() {
     ] {
         assert!(k.describe().to_lowercase().contains(word), "{k:?}");
     }
-    assert_eq!(ErrorKind::from_code(12), None);
+    assert_eq!(ErrorKind::from_code(12), Some(ErrorKind::Stopped));
+    assert_eq!(ErrorKind::from_code(13), None);
     assert_eq!(ErrorKind::from_code(-1), None);
 }
 

@@ -94,6 +94,7 @@ fn memory_budget_is_enforced() {
     let config = occ_runtime::NodeConfig {
         memory_budget: 4096,
         timeslice: false,
+        ..Default::default()
     };
     let mut node = Node::new(config, Default::default(), occ_runtime::HostIo::stdio());
     assert!(node.alloc_workspace(100).is_ok());
