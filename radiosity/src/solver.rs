@@ -5,7 +5,9 @@
 //! sample point to it ([`crate::kernels::shoot_batch`]), refines edges where the shot's
 //! contribution changes fast and is not linear, and books the power:
 //! - each element receives `A_e · ΔB_src · mean(F at its corners)`;
-//! - it absorbs `(1 - ρ)` of that and adds `ρ` of it to its patch's unshot power;
+//! - it absorbs `(1 - ρ)` of that and adds `ρ` of it to its own unshot power (a patch's is the
+//!   sum over its elements, and a patch shoots from where its elements hold it:
+//!   [`SourceDensity`]);
 //! - what no element received is booked as *escaped* (through openings, plus form-factor error).
 //!
 //! Accounts are kept in `f64` so that `emitted = absorbed + escaped + unshot` holds to rounding.
