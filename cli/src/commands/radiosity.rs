@@ -76,6 +76,16 @@ pub struct Args {
     /// Exposure applied to radiance before the sRGB curve.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
+    /// View for image.png: "pos X Y Z look X Y Z up X Y Z fov DEG" (look: a point looked at;
+    /// `dir X Y Z` may replace it). Default: the scene's `# camera:` comment, else a view chosen
+    /// to see into the scene.
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// Most elements to mesh the scene into (about 250 bytes each with their sample points).
+    /// Over it, default sizes are coarsened until the estimate fits; sizes given with
+    /// --patch-size / --element-size are refused.
+    #[arg(long, default_value_t = 4_000_000)]
+    pub max_elements: usize,
     /// Run only the path tracer (the ground truth): each object's mean B and the probes' B with
     /// standard errors, into `pathtrace.json`.
     #[arg(long, conflicts_with = "reference_mc")]
@@ -90,16 +100,6 @@ pub struct Args {
     /// Path tracer: most bounces a path makes (1: direct light only).
     #[arg(long, default_value_t = 1000)]
     pub pt_max_bounces: u32,
-    /// View for image.png: "pos X Y Z look X Y Z up X Y Z fov DEG" (look: a point looked at;
-    /// `dir X Y Z` may replace it). Default: the scene's `# camera:` comment, else a view chosen
-    /// to see into the scene.
-    #[arg(long)]
-    pub camera: Option<String>,
-    /// Most elements to mesh the scene into (about 250 bytes each with their sample points).
-    /// Over it, default sizes are coarsened until the estimate fits; sizes given with
-    /// --patch-size / --element-size are refused.
-    #[arg(long, default_value_t = 4_000_000)]
-    pub max_elements: usize,
 }
 
 /// Runs `occ radiosity`.
@@ -214,58 +214,6 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Runs the path tracer on the scene and probes, writes `pathtrace.json` into `--out` and prints
-/// the per-object means; returns the reference.
-fn path_trace(
-    args: &Args,
-    name: &str,
-    scene: &Scene,
-    probes: &[probe::Probe],
-) -> anyhow::Result<truth::Reference> {
-    let config = PathTraceConfig {
-        samples: args.pt_samples,
-        seed: args.seed,
-        max_bounces: args.pt_max_bounces,
-    };
-    let start = Instant::now();
-    let tracer = PathTracer::new(scene);
-    let means = tracer.object_means(&config);
-    let at_probes = tracer.probes(probes, &config);
-    let seconds = start.elapsed().as_secs_f64();
-    // The program's own path says nothing about the run; the arguments do.
-    let command = std::iter::once("occ".to_string())
-        .chain(std::env::args().skip(1))
-        .collect::<Vec<_>>()
-        .join(" ");
-    let pairs: Vec<_> = probes.iter().copied().zip(at_probes).collect();
-    let reference =
-        truth::Reference::new((name, scene), &command, &config, seconds, &means, &pairs);
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let path = args.out.join("pathtrace.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&reference)?)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    for o in &reference.objects {
-        let rel = |c: usize| 100.0 * o.std_err[c] / o.mean_b[c].max(f64::MIN_POSITIVE);
-        println!(
-            "{:<24} B = {:9.5} {:9.5} {:9.5}   std err {:.2}% {:.2}% {:.2}%",
-            o.name,
-            o.mean_b[0],
-            o.mean_b[1],
-            o.mean_b[2],
-            rel(0),
-            rel(1),
-            rel(2)
-        );
-    }
-    println!(
-        "{name}: path traced, {} paths per object, {seconds:.2} s; written to {}",
-        config.samples,
-        path.display()
-    );
-    Ok(reference)
-}
-
 /// The meshing sizes: given, or defaults (patches diagonal / 4, elements diagonal / 20)
 /// coarsened until the element estimate fits --max-elements. Given sizes over it are refused.
 fn mesh_config(args: &Args, name: &str, scene: &Scene) -> anyhow::Result<MeshConfig> {
@@ -356,6 +304,58 @@ impl Progress {
             if detail.is_empty() { "" } else { ": " }
         );
     }
+}
+
+/// Runs the path tracer on the scene and probes, writes `pathtrace.json` into `--out` and prints
+/// the per-object means; returns the reference.
+fn path_trace(
+    args: &Args,
+    name: &str,
+    scene: &Scene,
+    probes: &[probe::Probe],
+) -> anyhow::Result<truth::Reference> {
+    let config = PathTraceConfig {
+        samples: args.pt_samples,
+        seed: args.seed,
+        max_bounces: args.pt_max_bounces,
+    };
+    let start = Instant::now();
+    let tracer = PathTracer::new(scene);
+    let means = tracer.object_means(&config);
+    let at_probes = tracer.probes(probes, &config);
+    let seconds = start.elapsed().as_secs_f64();
+    // The program's own path says nothing about the run; the arguments do.
+    let command = std::iter::once("occ".to_string())
+        .chain(std::env::args().skip(1))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let pairs: Vec<_> = probes.iter().copied().zip(at_probes).collect();
+    let reference =
+        truth::Reference::new((name, scene), &command, &config, seconds, &means, &pairs);
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let path = args.out.join("pathtrace.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&reference)?)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    for o in &reference.objects {
+        let rel = |c: usize| 100.0 * o.std_err[c] / o.mean_b[c].max(f64::MIN_POSITIVE);
+        println!(
+            "{:<24} B = {:9.5} {:9.5} {:9.5}   std err {:.2}% {:.2}% {:.2}%",
+            o.name,
+            o.mean_b[0],
+            o.mean_b[1],
+            o.mean_b[2],
+            rel(0),
+            rel(1),
+            rel(2)
+        );
+    }
+    println!(
+        "{name}: path traced, {} paths per object, {seconds:.2} s; written to {}",
+        config.samples,
+        path.display()
+    );
+    Ok(reference)
 }
 
 fn check_args(args: &Args) -> anyhow::Result<()> {

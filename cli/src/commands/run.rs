@@ -73,7 +73,9 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     let compiled = match occ_codegen::compile_with(program, &front.checked, map, &set) {
         Ok(compiled) => compiled,
         Err(error) => {
-            eprintln!("{}: {error}", args.file.display());
+            for d in error.diagnostics() {
+                eprintln!("{:?}", d.to_report(map));
+            }
             return Ok(ExitCode::from(1));
         }
     };

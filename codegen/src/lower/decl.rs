@@ -4,7 +4,7 @@
 use cranelift_codegen::ir::{InstBuilder, types};
 use occ_compiler::checked::SymbolKind;
 use occ_compiler::types::Type;
-use occ_grammar::ast::{AbbrevMode, Decl, DeclKind, Name};
+use occ_grammar::ast::{AbbrevMode, Decl, DeclKind, Expr, ExprKind, Name};
 
 use super::{Loc, Res, Storage, Tr, mem};
 use crate::layout::{is_scalar, rank, size_of};
@@ -38,10 +38,15 @@ impl Tr<'_, '_> {
                         self.assign_to(a, &ty, &[], value)?;
                         self.bind(sym, off, false);
                     }
-                    _ => {
-                        let l = self.place(value)?;
-                        self.bind_ref(sym, &l);
-                    }
+                    _ => match &value.kind {
+                        ExprKind::Table(items) if self.is_chan_table(&ty) => {
+                            self.chan_table(sym, items)?;
+                        }
+                        _ => {
+                            let l = self.place(value)?;
+                            self.bind_ref(sym, &l);
+                        }
+                    },
                 }
                 Ok(())
             }
@@ -183,6 +188,29 @@ impl Tr<'_, '_> {
             }
         };
         self.cx.env.insert(sym, st);
+    }
+
+    /// Reports whether `ty` is a one-dimensional array of channels.
+    fn is_chan_table(&self, ty: &Type) -> bool {
+        let ty = crate::layout::resolve(&self.cx.checked.types, ty);
+        matches!(ty.elem(), Some(Type::Chan(..)))
+    }
+
+    /// Binds `sym` to a table of the addresses of the channels `items`.
+    fn chan_table(&mut self, sym: occ_compiler::checked::SymbolId, items: &[Expr]) -> Res<()> {
+        let off = self.frame.alloc(8 * items.len() as i64);
+        for (k, item) in items.iter().enumerate() {
+            let l = self.place(item)?;
+            let a = self.local_addr(off);
+            self.b.ins().store(mem(), l.addr, a, 8 * k as i32);
+        }
+        let st = Storage::ChanTable {
+            depth: self.depth,
+            offset: off,
+            len: items.len() as u32,
+        };
+        self.cx.env.insert(sym, st);
+        Ok(())
     }
 
     /// Binds `sym` by reference to place `l` (address and dimension lengths in the frame).
