@@ -35,8 +35,9 @@ pub struct Args {
     /// Output folder (created if missing).
     #[arg(long, default_value = "radiosity-out")]
     pub out: PathBuf,
-    /// Stopping rule: unshot=FRACTION, shots=N or time=SECONDS.
-    #[arg(long, default_value = "unshot=0.01")]
+    /// Stopping rule: error=FRACTION (every object's mean B within it, by the solver's
+    /// estimate), unshot=FRACTION (of the emitted power), shots=N or time=SECONDS.
+    #[arg(long, default_value = "error=0.01")]
     pub until: Until,
     /// A report.json to measure the RMS error against (matched by object name).
     #[arg(long)]
@@ -107,6 +108,9 @@ pub struct Args {
     /// Path tracer: paths per object and per probe (the standard error falls as 1/sqrt).
     #[arg(long, default_value_t = 65_536)]
     pub pt_samples: u64,
+    /// Path tracer: most bounces a path makes (1: direct light only).
+    #[arg(long, default_value_t = 1000)]
+    pub pt_max_bounces: u32,
 }
 
 /// Runs `occ radiosity`.
@@ -347,14 +351,18 @@ fn path_trace(
     let config = PathTraceConfig {
         samples: args.pt_samples,
         seed: args.seed,
-        ..PathTraceConfig::default()
+        max_bounces: args.pt_max_bounces,
     };
     let start = Instant::now();
     let tracer = PathTracer::new(scene);
     let means = tracer.object_means(&config);
     let at_probes = tracer.probes(probes, &config);
     let seconds = start.elapsed().as_secs_f64();
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    // The program's own path says nothing about the run; the arguments do.
+    let command = std::iter::once("occ".to_string())
+        .chain(std::env::args().skip(1))
+        .collect::<Vec<_>>()
+        .join(" ");
     let pairs: Vec<_> = probes.iter().copied().zip(at_probes).collect();
     let reference =
         truth::Reference::new((name, scene), &command, &config, seconds, &means, &pairs);
