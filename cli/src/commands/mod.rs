@@ -4,3 +4,4 @@ pub mod check;
 pub mod radiosity;
 pub mod run;
 pub mod test;
+pub mod transport;
