@@ -1,5 +1,6 @@
-//! The file-system edge of the front end: load an occam file and its includes, preprocess, parse and
-//! check it, and return its diagnostics in a form both `occ check` and `occ test` use.
+//! The file-system edge of the front end: read an occam file, load its includes, run the one
+//! IO-free front end (`occ_codegen::front_end`: preprocess, parse, check, bind EXTERNALs) and
+//! return its diagnostics located in files, in a form both `occ check` and `occ test` use.
 //!
 //! Contract (relied on by `commands::check` and the `occ test` harness):
 //! - `check_file` never panics and never hangs on any input; every problem is a `Diag`.
@@ -14,9 +15,9 @@
 //! (from `OCC_STDLIB`, else the `stdlib/` folder of the workspace the executable was built in or
 //! sits in).
 
-use occ_grammar::ast::Span;
-use occ_grammar::diagnostic::{self as gd, Diagnostic};
+use occ_grammar::diagnostic::Diagnostic;
 use occ_grammar::preprocess::Loader;
+use occ_grammar::source_map::SourceMap;
 use std::path::{Path, PathBuf};
 
 /// Options shared by `occ check`, `occ run` and `occ test`.
@@ -27,28 +28,35 @@ pub struct Options {
     pub include_dirs: Vec<PathBuf>,
 }
 
-/// How serious a diagnostic is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Severity {
-    /// The program is rejected.
-    Error,
-    /// The program is accepted, but something deserves attention.
-    Warning,
-}
+pub use occ_grammar::diagnostic::Severity;
 
-/// One diagnostic, located in the original source file.
+/// One diagnostic, located in the original source file and rendered.
 #[derive(Debug)]
 pub struct Diag {
     /// Error or warning.
     pub severity: Severity,
     /// The file the problem is in.
     pub file: PathBuf,
-    /// 1-based line in `file`.
+    /// 1-based line in `file` (0 for a problem of the whole program).
     pub line: usize,
     /// The one-line message (without the rendering).
     pub message: String,
-    /// The full miette report, for rendering with labels and help.
+    /// The full miette report, with every label, help and code.
     pub report: miette::Report,
+}
+
+impl Diag {
+    /// Locates `d` through `map` and renders it.
+    pub fn new(d: &Diagnostic, map: &SourceMap) -> Diag {
+        let (file, line) = d.file_line(map).unwrap_or_default();
+        Diag {
+            severity: d.severity,
+            file: PathBuf::from(file),
+            line,
+            message: d.message.clone(),
+            report: d.to_report(map),
+        }
+    }
 }
 
 /// The result of checking one program.
@@ -89,97 +97,27 @@ pub fn load(path: &Path, options: &Options) -> (Option<Front>, Checked) {
         Err(error) => return (None, unreadable(path, &error)),
     };
     let mut loader = FsLoader::new(options);
-    let parsed = occ_grammar::parse_source(&path.display().to_string(), &text, &mut loader);
-    let mut diagnostics: Vec<Diag> = parsed
+    let path_text = path.display().to_string();
+    let front = occ_codegen::front_end(&path_text, &text, &mut loader, &intrinsics());
+    let map = &front.parsed.map;
+    let mut diagnostics: Vec<Diag> = front
         .diagnostics
         .iter()
-        .map(|d| to_diag(d, &parsed))
+        .map(|d| Diag::new(d, map))
         .collect();
-
-    // The checker runs only on a complete tree: on a partial one every dropped declaration
-    // would come back as a cascade of "not declared" errors. A complete tree may still carry
-    // syntax errors that drop nothing (operators mixed without parentheses), so those and the
-    // checker's errors are reported in one run.
-    let mut checked_program = None;
-    if parsed.complete {
-        let check_options = occ_compiler::Options::from_source(&text);
-        let (checked, found) = occ_compiler::check_with(&parsed.program, check_options);
-        diagnostics.extend(found.iter().map(|d| {
-            let severity = match d.severity {
-                occ_compiler::Severity::Error => Severity::Error,
-                occ_compiler::Severity::Warning => Severity::Warning,
-            };
-            located(
-                &parsed,
-                severity,
-                d.span,
-                d.message(),
-                d.label(),
-                d.kind.help(),
-            )
-        }));
-        if let Some(c) = &checked {
-            let bindings = occ_codegen::link::bind_externals(c, &intrinsics());
-            diagnostics.extend(
-                bindings
-                    .errors
-                    .into_iter()
-                    .map(|e| located(&parsed, Severity::Error, e.span, e.message, e.label, None)),
-            );
-        }
-        checked_program = checked;
-    }
-
     diagnostics.sort_by(|a, b| (&a.file, a.line).cmp(&(&b.file, b.line)));
     let checked = Checked { diagnostics };
-    let front = match checked_program {
-        Some(checked_program) if !checked.has_errors() => Some(Front {
-            parsed,
-            checked: checked_program,
-        }),
-        _ => None,
-    };
-    (front, checked)
+    let passed = front.checked.map(|checked| Front {
+        parsed: front.parsed,
+        checked,
+    });
+    (passed, checked)
 }
 
 /// The native intrinsics occ links programs against: the runtime's own and the radiosity
 /// kernels (`#INCLUDE "radiosity.inc"` declares them).
 pub fn intrinsics() -> occ_codegen::IntrinsicSet {
     occ_codegen::IntrinsicSet::new().with(occ_radiosity::intrinsics::INTRINSICS)
-}
-
-/// Builds a `Diag` for a problem at `span` of the preprocessed text of `parsed`.
-pub fn located(
-    parsed: &occ_grammar::Parsed,
-    severity: Severity,
-    span: Span,
-    message: String,
-    label: String,
-    help: Option<String>,
-) -> Diag {
-    let mut diag = Diagnostic::error(span, message, label);
-    diag.help = help;
-    if severity == Severity::Warning {
-        diag = diag.warning();
-    }
-    to_diag(&diag, parsed)
-}
-
-fn to_diag(d: &Diagnostic, parsed: &occ_grammar::Parsed) -> Diag {
-    let location = d.locate(&parsed.map);
-    let (file, line) = location
-        .and_then(|l| Some((parsed.map.files.get(l.file)?.path.clone(), l.line)))
-        .unwrap_or_default();
-    Diag {
-        severity: match d.severity {
-            gd::Severity::Error => Severity::Error,
-            gd::Severity::Warning => Severity::Warning,
-        },
-        file: PathBuf::from(file),
-        line,
-        message: d.message.clone(),
-        report: d.to_report(&parsed.map),
-    }
 }
 
 fn unreadable(path: &Path, error: &std::io::Error) -> Checked {

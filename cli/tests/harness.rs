@@ -1,5 +1,5 @@
 //! End-to-end behaviour of the `occ test` harness itself, on small suites written to a temporary
-//! folder: discovery, the closing line, skipping of run tests and the exit status.
+//! folder: discovery, the closing line, running programs and the exit status.
 
 use std::fs;
 use std::path::PathBuf;
@@ -33,25 +33,38 @@ const ACCEPT: &str =
     "-- test: accept\nPROC main (CHAN BYTE keyboard?, screen!, error!)\n  SKIP\n:\n";
 const RUN: &str = "-- test: run\n-- stdout: A\nPROC main (CHAN BYTE keyboard?, screen!, error!)\n  screen ! 'A'\n:\n";
 
-/// A `run` test counts as skipped while programs cannot run, and as passed once they can; it is
-/// never counted as passed without running.
+/// A `run` test runs its program and passes on the expected output.
 #[test]
-fn run_tests_are_skipped_until_they_can_run() {
-    let dir = scratch("skip");
+fn run_tests_run() {
+    let dir = scratch("run");
     fs::write(dir.join("ok.occ"), ACCEPT).unwrap();
     fs::create_dir_all(dir.join("sub")).unwrap();
     fs::write(dir.join("sub").join("prints.occ"), RUN).unwrap();
     fs::write(dir.join("helper.inc"), "-- not a test\n").unwrap();
     let output = occ_test(&["-v", dir.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&output.stdout);
-    if stdout.contains("skip ") {
-        assert!(stdout.contains("prints.occ [run]: skipped (no code generator yet)"));
-        assert_eq!(last_line(&output), "1 passed, 0 failed, 1 skipped");
-    } else {
-        assert_eq!(last_line(&output), "2 passed, 0 failed");
-    }
+    assert!(stdout.contains("ok   "), "{stdout}");
+    assert_eq!(last_line(&output), "2 passed, 0 failed", "{stdout}");
     assert!(!stdout.contains("helper.inc"), "only .occ files are tests");
     assert!(output.status.success());
+}
+
+/// A `run` test whose program cannot be started fails the suite: it is never skipped, and never
+/// counted as passed without running.
+#[test]
+fn a_run_that_cannot_start_fails() {
+    let dir = scratch("nostart");
+    fs::write(dir.join("ok.occ"), ACCEPT).unwrap();
+    fs::write(dir.join("prints.occ"), RUN).unwrap();
+    let runner = dir.join("no-such-occ");
+    let output = occ_test(&["--runner", runner.to_str().unwrap(), dir.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        stdout.contains("FAIL") && stdout.contains("prints.occ [run]: cannot start"),
+        "{stdout}"
+    );
+    assert_eq!(last_line(&output), "1 passed, 1 failed", "{stdout}");
+    assert!(!output.status.success());
 }
 
 #[test]

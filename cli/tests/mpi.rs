@@ -21,7 +21,10 @@ const PROGRAMS: &[(&str, &[&str])] = &[
 
 fn occ(mpi: bool, file: &str, extra: &[&str]) -> Output {
     let occ = env!("CARGO_BIN_EXE_occ");
-    let path = format!("{}/../tests/lang/network/{file}.occ", env!("CARGO_MANIFEST_DIR"));
+    let path = format!(
+        "{}/../tests/lang/network/{file}.occ",
+        env!("CARGO_MANIFEST_DIR")
+    );
     let mut args: Vec<&str> = vec!["run", &path, "--threads", "1"];
     args.extend(extra);
     let mut cmd = if mpi {
@@ -62,7 +65,11 @@ fn network_programs_agree_across_four_ranks() {
             "{file}: stdout under mpirun"
         );
         assert_eq!(own_stderr(&there), own_stderr(&here), "{file}: stderr");
-        assert_eq!(there.status.code(), here.status.code(), "{file}: exit status");
+        assert_eq!(
+            there.status.code(),
+            here.status.code(),
+            "{file}: exit status"
+        );
     }
 }
 
@@ -70,7 +77,12 @@ fn network_programs_agree_across_four_ranks() {
 fn deadlock_across_ranks_is_reported_per_node() {
     let o = occ(true, "deadlock_two_nodes", &[]);
     let err = own_stderr(&o);
-    for want in ["PROCESSOR 1", "PROCESSOR 2", "input from channel down", "input from channel up"] {
+    for want in [
+        "PROCESSOR 1",
+        "PROCESSOR 2",
+        "input from channel down",
+        "input from channel up",
+    ] {
         assert!(err.contains(want), "missing {want:?} in {err}");
     }
     assert_eq!(o.status.code(), Some(1));

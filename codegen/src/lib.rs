@@ -62,6 +62,28 @@ impl Drop for Compiled {
     }
 }
 
+/// The whole front end, IO-free: preprocesses, parses and checks the file `path` whose text is
+/// `text` ([`occ_compiler::check_source`]), then binds its `#PRAGMA EXTERNAL` routines to
+/// `intrinsics` ([`link::bind_externals`]), so that a program that passes can be compiled with
+/// [`compile_with`] and the same set. `occ check`, `occ run`, `occ test`, the tests and the
+/// benchmarks all start here.
+pub fn front_end(
+    path: &str,
+    text: &str,
+    loader: &mut dyn occ_grammar::preprocess::Loader,
+    intrinsics: &IntrinsicSet,
+) -> occ_compiler::Front {
+    let mut front = occ_compiler::check_source(path, text, loader);
+    if let Some(checked) = &front.checked {
+        let bindings = link::bind_externals(checked, intrinsics);
+        if !bindings.errors.is_empty() {
+            front.diagnostics.extend(bindings.errors);
+            front.checked = None;
+        }
+    }
+    front
+}
+
 /// Compiles `program` (checked as `checked`, spans mapped by `map`) with the runtime's own
 /// intrinsics only; see [`compile_with`].
 pub fn compile(
@@ -119,7 +141,10 @@ pub fn compile_with(
     let node_entry = e.param_types.len() >= 4
         && matches!(e.param_types[2], Type::Array(None, ref t) if matches!(**t, Type::Chan(..)));
     if !host_entry && !node_entry {
-        return Err(CodegenError::BadEntry(name.text.clone()));
+        return Err(CodegenError::BadEntry {
+            name: name.text.clone(),
+            span: name.span,
+        });
     }
     cx.jit.finalize()?;
     let mut info = std::mem::take(&mut cx.info);

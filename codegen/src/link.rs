@@ -14,26 +14,22 @@ use occ_compiler::CheckedProgram;
 use occ_compiler::checked::{SymbolId, SymbolKind};
 use occ_compiler::types::{Prim, Type, TypeTable};
 use occ_grammar::ast::{ParamMode, Span};
+use occ_grammar::diagnostic::Diagnostic;
 use occ_runtime::intrinsic::{Intrinsic, IntrinsicSet, MachineType, ParamKind};
 
-/// Why an EXTERNAL could not be bound.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct LinkError {
-    /// Where (a call, or the name in the pragma).
-    pub span: Span,
-    /// The one-line message.
-    pub message: String,
-    /// The label under the span.
-    pub label: String,
-}
+/// The code of a call to an EXTERNAL that no linked table has.
+const UNBOUND: &str = "link::unbound";
+/// The code of an EXTERNAL whose signature disagrees with its table entry.
+const MISMATCH: &str = "link::mismatch";
 
 /// The EXTERNAL routines of a checked program bound to their intrinsics, and the problems.
 #[derive(Debug, Default)]
 pub struct Bindings {
     /// Each bound EXTERNAL symbol's intrinsic.
     pub bound: HashMap<SymbolId, &'static Intrinsic>,
-    /// Unbound calls and signature disagreements, in source order.
-    pub errors: Vec<LinkError>,
+    /// Unbound calls (at the call) and signature disagreements (at the pragma's name), in
+    /// source order.
+    pub errors: Vec<Diagnostic>,
 }
 
 /// Binds every EXTERNAL of `checked` to an intrinsic of `set`.
@@ -51,10 +47,9 @@ pub fn bind_externals(checked: &CheckedProgram, set: &IntrinsicSet) -> Bindings 
                 .map(|(span, _)| *span)
                 .collect();
             uses.sort_by_key(|s| s.start);
-            out.errors.extend(uses.into_iter().map(|span| LinkError {
-                span,
-                message: format!("no native intrinsic {} is linked into occ", sym.name),
-                label: "called here".to_string(),
+            let message = format!("no native intrinsic {} is linked into occ", sym.name);
+            out.errors.extend(uses.into_iter().map(|span| {
+                Diagnostic::error(span, message.clone(), "called here").with_code(UNBOUND)
             }));
             continue;
         };
@@ -72,20 +67,20 @@ pub fn bind_externals(checked: &CheckedProgram, set: &IntrinsicSet) -> Bindings 
             })
             .collect();
         match disagreement(&checked.types, &params, &info.results, i) {
-            Some(why) => out.errors.push(LinkError {
-                span: sym.span,
-                message: format!(
+            Some(why) => {
+                let message = format!(
                     "EXTERNAL {} does not match the linked intrinsic: {why}",
                     sym.name
-                ),
-                label: "declared here".to_string(),
-            }),
+                );
+                let d = Diagnostic::error(sym.span, message, "declared here").with_code(MISMATCH);
+                out.errors.push(d);
+            }
             None => {
                 out.bound.insert(id, i);
             }
         }
     }
-    out.errors.sort_by_key(|e| e.span.start);
+    out.errors.sort_by_key(|e| e.span().map_or(0, |s| s.start));
     out
 }
 

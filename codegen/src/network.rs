@@ -24,8 +24,8 @@ use occ_runtime::topology::{LINKS, Shape};
 use occ_runtime::{ErrorKind, HostIo, LinkStats, Network, Node, NodeConfig, RunError, Stats};
 
 use crate::Compiled;
-use crate::spread::{self, LinkPart};
 use crate::lower::{Res, Storage, Tr};
+use crate::spread::{self, LinkPart};
 
 /// What the code generator learnt of a configured network: per node what `rt_placement`
 /// stores, and where each link's channel word sits in the frame.
@@ -263,12 +263,20 @@ impl Built {
                 // SAFETY (both): `connect_remote` returns the address of the end's channel
                 // word, alive as long as the node.
                 if lw {
-                    let c = self.net.connect_remote(&mut self.nodes[w], true, name, id, sp.owner(r, n));
+                    let c =
+                        self.net
+                            .connect_remote(&mut self.nodes[w], true, name, id, sp.owner(r, n));
                     words.0 = unsafe { *c };
                     self.parts.push((id, LinkPart::Writer));
                 }
                 if lr {
-                    let c = self.net.connect_remote(&mut self.nodes[r], false, name, id, sp.owner(w, n));
+                    let c = self.net.connect_remote(
+                        &mut self.nodes[r],
+                        false,
+                        name,
+                        id,
+                        sp.owner(w, n),
+                    );
                     words.1 = unsafe { *c };
                     self.parts.push((id, LinkPart::Reader));
                 }
@@ -333,7 +341,9 @@ impl Built {
             // SAFETY: the frame is laid out for `c.entry` and filled.
             unsafe { self.nodes[i].spawn(ws, c.entry) };
         }
-        let local: Vec<usize> = (0..self.nodes.len()).filter(|&i| self.is_local(i)).collect();
+        let local: Vec<usize> = (0..self.nodes.len())
+            .filter(|&i| self.is_local(i))
+            .collect();
         let nodes: Vec<Box<Node>> = std::mem::take(&mut self.nodes)
             .into_iter()
             .enumerate()

@@ -22,7 +22,10 @@ pub(crate) enum LinkPart {
 }
 
 /// Encodes one rank's part of a run: `(node number, outcome)` and `(link number, part, stats)`.
-pub(crate) fn encode(nodes: &[(usize, NodeOutcome)], links: &[(usize, LinkPart, LinkStats)]) -> Vec<u8> {
+pub(crate) fn encode(
+    nodes: &[(usize, NodeOutcome)],
+    links: &[(usize, LinkPart, LinkStats)],
+) -> Vec<u8> {
     let mut b = Vec::new();
     put(&mut b, nodes.len() as u64);
     for (i, n) in nodes {
@@ -200,7 +203,10 @@ mod test {
         );
         let b = encode(
             &[(0, node("node 0", Ok(())))],
-            &[(0, LinkPart::Reader, link(4, 9, 11)), (1, LinkPart::Whole, link(2, 1, 1))],
+            &[
+                (0, LinkPart::Reader, link(4, 9, 11)),
+                (1, LinkPart::Whole, link(2, 1, 1)),
+            ],
         );
         let (nodes, links) = merge(&[a, b]);
         assert_eq!(nodes[0].name, "node 0");

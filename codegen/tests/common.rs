@@ -6,6 +6,8 @@
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
+use occ_codegen::IntrinsicSet;
+use occ_grammar::diagnostic::Diagnostic;
 use occ_runtime::{HostIo, NodeConfig, RunError, Stats};
 
 /// A shared byte buffer usable as host output.
@@ -36,23 +38,27 @@ impl occ_grammar::preprocess::Loader for StdlibLoader {
     }
 }
 
-/// Compiles `src`; panics with the diagnostics if it does not compile.
+/// Compiles `src` through the one front end against `set`; an error comes back as its
+/// diagnostics, one `file:line: message` each.
+pub fn try_compile(src: &str, set: &IntrinsicSet) -> Result<occ_codegen::Compiled, String> {
+    let front = occ_codegen::front_end("test.occ", src, &mut StdlibLoader, set);
+    let parsed = &front.parsed;
+    let located = |d: &Diagnostic| {
+        let (file, line) = d.file_line(&parsed.map).unwrap_or(("?", 0));
+        format!("{file}:{line}: {}", d.message)
+    };
+    let lines = |found: &[Diagnostic]| found.iter().map(located).collect::<Vec<_>>().join("\n");
+    let Some(checked) = &front.checked else {
+        return Err(lines(&front.diagnostics));
+    };
+    occ_codegen::compile_with(&parsed.program, checked, &parsed.map, set)
+        .map_err(|e| lines(&e.diagnostics()))
+}
+
+/// Compiles `src` with the runtime's own intrinsics; panics with the diagnostics if it does not
+/// compile.
 pub fn compile(src: &str) -> occ_codegen::Compiled {
-    let parsed = occ_grammar::parse_source("test.occ", src, &mut StdlibLoader);
-    assert!(
-        !parsed.has_errors(),
-        "parse errors: {:?}",
-        parsed.diagnostics
-    );
-    let (checked, diags) = occ_compiler::check(&parsed.program);
-    let checked = checked.unwrap_or_else(|| {
-        panic!(
-            "check errors: {:?}",
-            diags.iter().map(|d| d.message()).collect::<Vec<_>>()
-        )
-    });
-    occ_codegen::compile(&parsed.program, &checked, &parsed.map)
-        .unwrap_or_else(|e| panic!("codegen: {e}"))
+    try_compile(src, &IntrinsicSet::new()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The outcome of running a program.

@@ -4,7 +4,7 @@
 mod common;
 
 use common::Buf;
-use occ_codegen::{CodegenError, IntrinsicSet};
+use occ_codegen::IntrinsicSet;
 use occ_runtime::abi::Word;
 use occ_runtime::intrinsic::{Intrinsic, MachineType, ParamKind::*};
 use occ_runtime::{HostIo, NodeConfig};
@@ -69,13 +69,10 @@ static TABLE: &[Intrinsic] = &[
     },
 ];
 
-fn build(src: &str) -> Result<occ_codegen::Compiled, CodegenError> {
-    let parsed = occ_grammar::parse_source("test.occ", src, &mut common::StdlibLoader);
-    assert!(!parsed.has_errors(), "{:?}", parsed.diagnostics);
-    let (checked, diags) = occ_compiler::check(&parsed.program);
-    let checked = checked.unwrap_or_else(|| panic!("{:?}", diags));
-    let set = IntrinsicSet::new().with(TABLE);
-    occ_codegen::compile_with(&parsed.program, &checked, &parsed.map, &set)
+/// Compiles `src` against `TABLE`; an error comes back as its diagnostics, one
+/// `file:line: message` each.
+fn build(src: &str) -> Result<occ_codegen::Compiled, String> {
+    common::try_compile(src, &IntrinsicSet::new().with(TABLE))
 }
 
 fn run(src: &str) -> String {
@@ -136,7 +133,7 @@ PROC main (CHAN BYTE keyboard?, screen!, error!)
 :
 "
     );
-    let e = build(&src).err().expect("link error").to_string();
+    let e = build(&src).err().expect("link error");
     assert!(
         e.contains("test.occ:6:") && e.contains("no native intrinsic T.NONE is linked into occ"),
         "{e}"
@@ -168,7 +165,7 @@ fn a_signature_that_disagrees_with_the_table_is_an_error_at_the_pragma() {
         let src = format!(
             "#PRAGMA EXTERNAL \"{decl}\"\nPROC main (CHAN BYTE keyboard?, screen!, error!)\n  SKIP\n:\n"
         );
-        let e = build(&src).err().expect("link error").to_string();
+        let e = build(&src).err().expect("link error");
         assert!(e.contains("test.occ:1:") && e.contains(why), "{decl}: {e}");
     }
 }
@@ -208,12 +205,8 @@ PROC main (CHAN BYTE keyboard?, screen!, error!)
     out.bool (b, 0, screen!)
 :
 ";
-    let parsed = occ_grammar::parse_source("test.occ", src, &mut common::StdlibLoader);
-    let (checked, _) = occ_compiler::check(&parsed.program);
-    let checked = checked.expect("checks");
-    let set = IntrinsicSet::new().with(BUMP);
-    let c = occ_codegen::compile_with(&parsed.program, &checked, &parsed.map, &set)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let c =
+        common::try_compile(src, &IntrinsicSet::new().with(BUMP)).unwrap_or_else(|e| panic!("{e}"));
     let out = Buf::default();
     let host = HostIo::new(
         Box::new(std::io::empty()),

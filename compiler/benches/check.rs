@@ -73,10 +73,8 @@ fn bench(c: &mut Criterion) {
     group.sample_size(10);
     group.bench_function(format!("occ check ({lines} lines)"), |b| {
         b.iter(|| {
-            let parsed = occ_grammar::parse_source("big.occ", &text, &mut HashMap::new());
-            assert!(!parsed.has_errors());
-            let (checked, diags) = occ_compiler::check(&parsed.program);
-            assert!(diags.is_empty() && checked.is_some());
+            let front = occ_compiler::check_source("big.occ", &text, &mut HashMap::new());
+            assert!(front.diagnostics.is_empty() && front.checked.is_some());
         })
     });
     group.finish();

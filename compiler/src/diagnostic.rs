@@ -6,17 +6,8 @@
 //! messages in occam's terms. Spans are byte offsets into the preprocessed program text; the CLI
 //! maps them back to files and lines.
 
-use miette::{LabeledSpan, SourceSpan};
 use occ_grammar::ast::Span;
-
-/// How serious a diagnostic is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Severity {
-    /// The program is rejected.
-    Error,
-    /// The program is accepted but something deserves attention.
-    Warning,
-}
+pub use occ_grammar::diagnostic::Severity;
 
 /// What went wrong.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -75,6 +66,19 @@ pub enum DiagnosticKind {
         /// The value, as written.
         value: String,
     },
+    /// Occurs when a CASE has more than one ELSE. Example: `ELSE` ... `ELSE` in one CASE.
+    DuplicateElse,
+    /// Occurs when a VALOF (a FUNCTION body or value process) holds a PAR or ALT.
+    /// Example: `INT FUNCTION f () ... VALOF` / `PAR` ...
+    NotInValof {
+        /// `PAR` or `ALT`.
+        what: &'static str,
+    },
+    /// Occurs when a PRI PAR is nested in the high-priority branch of another (there are only
+    /// two priorities). Example: `PRI PAR` / `  PRI PAR` ...
+    NestedPriPar,
+    /// Occurs when the exponent of a REAL literal has no sign. Example: `1.0E5` for `1.0E+5`.
+    ExponentSign,
     /// Occurs when a FUNCTION or VALOF changes or communicates on something declared outside
     /// it. Example: `INT FUNCTION f () ... VALOF total := 0 ...` with `total` a free variable.
     SideEffect {
@@ -188,6 +192,13 @@ pub enum DiagnosticKind {
 }
 
 impl DiagnosticKind {
+    /// Returns the variant's name (`ParUsage`), a stable code for tools and tests.
+    pub fn name(&self) -> String {
+        let debug = format!("{self:?}");
+        let end = debug.find([' ', '{', '(']).unwrap_or(debug.len());
+        debug[..end].to_string()
+    }
+
     /// Returns the one-line message: lower case, concrete, naming the thing.
     pub fn message(&self) -> String {
         use DiagnosticKind::*;
@@ -211,6 +222,17 @@ impl DiagnosticKind {
                 format!("conversion from {from} to {to} needs ROUND or TRUNC")
             }
             DuplicateOption { value } => format!("CASE option {value} appears more than once"),
+            DuplicateElse => "a CASE may have only one ELSE".into(),
+            NotInValof { what } => {
+                format!("{what} is not allowed in a FUNCTION or VALOF (a value process)")
+            }
+            NestedPriPar => {
+                "PRI PAR inside the high-priority branch of a PRI PAR (there are only two priorities)"
+                    .into()
+            }
+            ExponentSign => {
+                "the exponent of a REAL literal needs a sign: write E+n or E-n".into()
+            }
             SideEffect { name } => format!(
                 "`{name}` is declared outside this FUNCTION or VALOF, which may not change it or communicate on it"
             ),
@@ -297,15 +319,17 @@ impl DiagnosticKind {
     }
 }
 
-/// One diagnostic: a kind, where it is, and optionally a related place.
+/// One finding of the checker: a kind, where it is, and related places. It becomes the one
+/// diagnostic type of occ ([`occ_grammar::diagnostic::Diagnostic`]) through
+/// [`Diagnostic::to_diagnostic`], which every renderer uses; tests assert on its kind.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Diagnostic {
     /// What went wrong.
     pub kind: DiagnosticKind,
     /// The offending text.
     pub span: Span,
-    /// A related place ("the other branch", "declared here"), with its label.
-    pub related: Option<(Span, String)>,
+    /// Related places ("the other branch", "declared here"), each with its label.
+    pub related: Vec<(Span, String)>,
     /// Error or warning.
     pub severity: Severity,
     /// A label for `span` more specific than the kind's (see [`DiagnosticKind::label`]).
@@ -318,7 +342,7 @@ impl Diagnostic {
         Diagnostic {
             kind,
             span,
-            related: None,
+            related: Vec::new(),
             severity: Severity::Error,
             label: None,
         }
@@ -337,13 +361,32 @@ impl Diagnostic {
 
     /// Adds a related span with its label.
     pub fn with_related(mut self, span: Span, label: impl Into<String>) -> Self {
-        self.related = Some((span, label.into()));
+        self.related.push((span, label.into()));
         self
     }
 
     /// Returns the one-line message.
     pub fn message(&self) -> String {
         self.kind.message()
+    }
+
+    /// The diagnostic users see: message, every label, help, and the kind's name as its code.
+    pub fn to_diagnostic(&self) -> occ_grammar::diagnostic::Diagnostic {
+        let mut d =
+            occ_grammar::diagnostic::Diagnostic::error(self.span, self.message(), self.label())
+                .with_code(format!("check::{}", self.kind.name()));
+        d.severity = self.severity;
+        d.help = self.kind.help();
+        for (span, label) in &self.related {
+            d = d.with_related(*span, label.clone());
+        }
+        d
+    }
+}
+
+impl From<&Diagnostic> for occ_grammar::diagnostic::Diagnostic {
+    fn from(d: &Diagnostic) -> Self {
+        d.to_diagnostic()
     }
 }
 
@@ -354,27 +397,3 @@ impl std::fmt::Display for Diagnostic {
 }
 
 impl std::error::Error for Diagnostic {}
-
-impl miette::Diagnostic for Diagnostic {
-    fn severity(&self) -> Option<miette::Severity> {
-        Some(match self.severity {
-            Severity::Error => miette::Severity::Error,
-            Severity::Warning => miette::Severity::Warning,
-        })
-    }
-
-    fn help<'a>(&'a self) -> Option<Box<dyn std::fmt::Display + 'a>> {
-        self.kind
-            .help()
-            .map(|h| Box::new(h) as Box<dyn std::fmt::Display>)
-    }
-
-    fn labels(&self) -> Option<Box<dyn Iterator<Item = LabeledSpan> + '_>> {
-        let main =
-            LabeledSpan::new_primary_with_span(Some(self.label()), SourceSpan::from(self.span));
-        let related = self.related.iter().map(|(span, label)| {
-            LabeledSpan::new_with_span(Some(label.clone()), SourceSpan::from(*span))
-        });
-        Some(Box::new(std::iter::once(main).chain(related)))
-    }
-}

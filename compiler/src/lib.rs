@@ -1,5 +1,6 @@
 //! Semantic analysis of occam programs: name resolution, types, constant folding, usage and alias
-//! checks. Every error is a `miette` diagnostic with a span. No file or process IO happens here.
+//! checks. Every error is a diagnostic with a span ([`Diagnostic::to_diagnostic`] gives the
+//! one type every pass of occ produces). No file or process IO happens here.
 //!
 //! Passes (one directory each, `mod.rs` + `test.rs`):
 //! - [`types`]: occam types and their T800 layout (`BYTESIN`, `OFFSETOF`);
@@ -32,6 +33,7 @@ pub mod checked;
 pub mod consteval;
 pub mod diagnostic;
 pub mod entity;
+pub mod front;
 mod fxhash;
 pub mod network;
 pub mod predefined;
@@ -41,6 +43,7 @@ pub mod usage;
 pub use check::Options;
 pub use checked::CheckedProgram;
 pub use diagnostic::{Diagnostic, DiagnosticKind, Severity};
+pub use front::{Front, check_source};
 
 /// Checks a parsed program: resolves names, computes types and constants, and applies the usage
 /// and alias rules.
@@ -52,7 +55,7 @@ pub fn check(program: &occ_grammar::ast::Program) -> (Option<CheckedProgram>, Ve
     check_with(program, Options::default())
 }
 
-/// [`check`] with some checks switched off (see [`Options::from_source`] for `#OPTION`).
+/// [`check`] with some checks switched off (see [`Options::from_letters`] for `#OPTION`).
 pub fn check_with(
     program: &occ_grammar::ast::Program,
     options: Options,

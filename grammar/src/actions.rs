@@ -31,7 +31,7 @@ pub struct State {
 }
 
 /// Records a recovered syntax error (the parser skipped to the end of the line).
-pub fn recovered<'a>(state: &mut State, error: ErrorRecovery<usize, Token<'a>, Diagnostic>) {
+pub fn recovered<'a>(state: &mut State, error: ErrorRecovery<usize, Token<'a>, Box<Diagnostic>>) {
     state.dropped = true;
     state
         .diagnostics
@@ -122,7 +122,7 @@ pub fn constructor<'a>(
     value: Expr,
     l: usize,
     r: usize,
-) -> Result<Expr, ParseError<usize, Token<'a>, Diagnostic>> {
+) -> Result<Expr, ParseError<usize, Token<'a>, Box<Diagnostic>>> {
     let ExprKind::Binary {
         op: BinOp::Eq,
         lhs,
@@ -135,11 +135,15 @@ pub fn constructor<'a>(
             "I was expecting `name = start` here",
         )
         .with_help("write [i = 0 FOR n | value]");
-        return Err(ParseError::User { error: diag });
+        return Err(ParseError::User {
+            error: Box::new(diag),
+        });
     };
     let ExprKind::Name(name) = lhs.kind else {
         let diag = Diagnostic::error(lhs.span, "the replicator index must be a name", "here");
-        return Err(ParseError::User { error: diag });
+        return Err(ParseError::User {
+            error: Box::new(diag),
+        });
     };
     let repl = Replicator {
         name,
@@ -252,7 +256,7 @@ pub enum ParamItem {
 /// Expands shared-type parameters (`VAL INT a, b`) to one [`Param`] per name.
 pub fn params<'a>(
     items: Vec<ParamItem>,
-) -> Result<Vec<Param>, ParseError<usize, Token<'a>, Diagnostic>> {
+) -> Result<Vec<Param>, ParseError<usize, Token<'a>, Box<Diagnostic>>> {
     let mut out: Vec<Param> = Vec::with_capacity(items.len());
     for item in items {
         let param = match item {
@@ -273,7 +277,9 @@ pub fn params<'a>(
                 let Some(previous) = out.last() else {
                     let diag = Diagnostic::error(span, "this parameter has no type", "here")
                         .with_help("write a type before the first parameter: (VAL INT x, y)");
-                    return Err(ParseError::User { error: diag });
+                    return Err(ParseError::User {
+                        error: Box::new(diag),
+                    });
                 };
                 Param {
                     mode: previous.mode,
@@ -294,14 +300,16 @@ pub fn place_in<'a>(
     name: Name,
     word: &str,
     area: Name,
-) -> Result<DeclKind, ParseError<usize, Token<'a>, Diagnostic>> {
+) -> Result<DeclKind, ParseError<usize, Token<'a>, Box<Diagnostic>>> {
     if word != "IN" {
         let diag = Diagnostic::error(
             area.span,
             "expected PLACE x AT address or PLACE x IN WORKSPACE",
             "here",
         );
-        return Err(ParseError::User { error: diag });
+        return Err(ParseError::User {
+            error: Box::new(diag),
+        });
     }
     Ok(DeclKind::PlaceIn { name, area })
 }

@@ -157,9 +157,20 @@ impl<'a> Layout<'a> {
             .iter()
             .position(|(_, t, _)| *t == Token::Keyword(Kw::Function));
         if let Some(function) = function {
-            for (_, token, _) in &mut self.out[first..first + function] {
-                if let Token::Name(name) = token {
-                    *token = Token::TypeName(name);
+            // The result types start the declaration: at the line's start, or after the `(` of
+            // a value process (`x := (MYINT FUNCTION f () IS y :`).
+            let start = self.out[first..first + function]
+                .iter()
+                .rposition(|(_, t, _)| matches!(t, Token::LParen | Token::BlockOpen))
+                .map_or(first, |p| first + p + 1);
+            // Names in array sizes (`[n]INT FUNCTION`) stay names.
+            let mut depth = 0usize;
+            for (_, token, _) in &mut self.out[start..first + function] {
+                match token {
+                    Token::LBracket => depth += 1,
+                    Token::RBracket => depth = depth.saturating_sub(1),
+                    Token::Name(name) if depth == 0 => *token = Token::TypeName(name),
+                    _ => {}
                 }
             }
         }
@@ -180,9 +191,11 @@ impl<'a> Layout<'a> {
     }
 
     /// If the logical line starting at `first` has an unclosed `(` followed by a declaration or
-    /// `VALOF` (`(VALOF` or `(INT x :`), returns the index of that `(` and the column of the token
-    /// after it: a block starts there.
+    /// `VALOF` (`(VALOF` or `(INT x :`, or any line ending in the `:` of a declaration, as in
+    /// `(MYINT x :` or `([3]REAL64 t :`), returns the index of that `(` and the column of the
+    /// token after it: a block starts there.
     fn block_after_paren(&self, first: usize) -> Option<(usize, usize)> {
+        let ends_declaration = self.out.last().is_some_and(|(_, t, _)| *t == Token::Colon);
         let mut depth = 0usize;
         for i in (first..self.out.len()).rev() {
             match self.out[i].1 {
@@ -191,7 +204,7 @@ impl<'a> Layout<'a> {
                 Token::LParen if depth > 0 => depth -= 1,
                 Token::LParen => {
                     let (at, token, _) = self.out.get(i + 1)?;
-                    return opens_block(token)
+                    return (ends_declaration || opens_block(token))
                         .then(|| (i, column(&self.text[self.line_start_of(*at)..*at])));
                 }
                 _ => {}

@@ -40,6 +40,9 @@ pub struct Parsed {
     pub map: SourceMap,
     /// Preprocessor, lexer and parser diagnostics, in order.
     pub diagnostics: Vec<Diagnostic>,
+    /// The letters of the `#OPTION` directives that took effect (see
+    /// [`preprocess::Preprocessed::options`]).
+    pub options: String,
     /// The program holds all the code written (no file missing, no token or line dropped), so a
     /// checker may run on it even when there are errors (such as a missing pair of
     /// parentheses) and report its own errors in the same run.
@@ -76,6 +79,7 @@ pub fn parse_source(path: &str, text: &str, loader: &mut dyn preprocess::Loader)
         text: pre.text,
         map: pre.map,
         diagnostics,
+        options: pre.options,
         complete: preprocessed_all && parse.complete && externals_ok,
     }
 }

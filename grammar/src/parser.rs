@@ -50,7 +50,7 @@ pub fn parse(text: &str) -> Parse {
     }
     let mut state = crate::actions::State::default();
     let result = generated::ProgramParser::new()
-        .parse(&mut state, tokens.into_iter().map(Ok::<_, Diagnostic>));
+        .parse(&mut state, tokens.into_iter().map(Ok::<_, Box<Diagnostic>>));
     diagnostics.append(&mut state.diagnostics);
     let (program, parsed_all) = match result {
         Ok(program) => (program, !state.dropped),
@@ -61,7 +61,7 @@ pub fn parse(text: &str) -> Parse {
     };
     diagnostics.sort_by_key(|d| match &d.place {
         crate::diagnostic::Place::Output(span) => span.start,
-        crate::diagnostic::Place::File(_) => 0,
+        crate::diagnostic::Place::File(_) | crate::diagnostic::Place::Program => 0,
     });
     Parse {
         program,
@@ -105,7 +105,7 @@ fn too_deep(tokens: &[crate::layout::Spanned<'_>]) -> Option<Diagnostic> {
 
 /// Maps every lalrpop `ParseError` variant to a diagnostic with a span, a label and the
 /// expected tokens in occam terms.
-pub fn syntax_error(error: ParseError<usize, Token<'_>, Diagnostic>) -> Diagnostic {
+pub fn syntax_error(error: ParseError<usize, Token<'_>, Box<Diagnostic>>) -> Diagnostic {
     match error {
         ParseError::InvalidToken { location } => Diagnostic::error(
             Span::new(location, location + 1),
@@ -143,7 +143,7 @@ pub fn syntax_error(error: ParseError<usize, Token<'_>, Diagnostic>) -> Diagnost
             ),
             "nothing more was expected here",
         ),
-        ParseError::User { error } => error,
+        ParseError::User { error } => *error,
     }
 }
 

@@ -30,8 +30,11 @@ pub struct FormFactorConfig {
     /// The analytic form is used when the disc estimator's bias bound `(A/m) / (π d_min²)`
     /// exceeds this (0: always analytic; infinity: always Wallace).
     pub max_disc_bias: f32,
-    /// Ray origins are lifted by this distance along the receiver normal, and rays stop this far
-    /// short of the source.
+    /// Ray origins are lifted by this distance along the receiver normal, and rays end at the
+    /// source sample lifted by this distance along the source normal. Both ends then lie off
+    /// the planes they start and end on, so a ray can meet neither its receiver's surface nor
+    /// its source's, however grazing (a ray stopped short *along itself* stays within rounding
+    /// of the source plane at grazing angles and hits it).
     pub offset: f32,
 }
 
@@ -79,16 +82,80 @@ pub fn point_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
 }
 
 /// Returns the stratified sample points of a source triangle for `m` rays (a jittered
-/// `k × k` grid with `k = ceil(sqrt(m))`, warped onto the triangle).
+/// `k × k` grid, `k = ceil(sqrt(m))`, warped onto the triangle by [`Tri::sample`]).
 pub fn source_samples(src: &Tri, m: u32, rng: &mut Pcg32, out: &mut Vec<Vec3>) {
+    source_samples_weighted(src, m, None, rng, out, &mut Vec::new());
+}
+
+/// [`source_samples`], and in `weights` the source's relative unshot radiosity at each sample
+/// (`density`; all 1 when `None`, and then `weights` is left empty).
+pub fn source_samples_weighted(
+    src: &Tri,
+    m: u32,
+    density: Option<&SourceDensity>,
+    rng: &mut Pcg32,
+    out: &mut Vec<Vec3>,
+    weights: &mut Vec<f32>,
+) {
     out.clear();
+    weights.clear();
     let k = (m.max(1) as f32).sqrt().ceil() as u32;
     for i in 0..k {
         for j in 0..k {
             let u = (i as f32 + rng.next_f32()) / k as f32;
             let v = (j as f32 + rng.next_f32()) / k as f32;
             out.push(src.sample(u, v));
+            if let Some(d) = density {
+                weights.push(d.at(u, v));
+            }
         }
+    }
+}
+
+/// How a source's unshot radiosity varies over it, relative to its mean: a `g × g` grid of cells
+/// over the square `(u, v)` that [`Tri::sample`] maps onto the triangle, each holding the
+/// density at its centre over the mean (so a uniform source is 1 everywhere).
+///
+/// This lets a patch shoot what each of its elements holds rather than its average: a floor
+/// patch half in a block's shadow shoots from its lit half only, which the block's face, close
+/// by, sees very differently (issue 10, cause 4). Far receivers average the same samples.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SourceDensity {
+    g: u32,
+    cells: Vec<f32>,
+}
+
+impl SourceDensity {
+    /// Tabulates `density(point)` (any scale, non-negative) over `src` on a `g × g` grid and
+    /// divides by its area-weighted mean; `None` when the mean is not positive or the density
+    /// is uniform within a part in a million (no weights needed).
+    pub fn new(src: &Tri, g: u32, density: impl Fn(Vec3) -> f32) -> Option<SourceDensity> {
+        let g = g.max(1);
+        let mut cells = Vec::with_capacity((g * g) as usize);
+        for i in 0..g {
+            for j in 0..g {
+                let (u, v) = ((i as f32 + 0.5) / g as f32, (j as f32 + 0.5) / g as f32);
+                cells.push(density(src.sample(u, v)).max(0.0));
+            }
+        }
+        // The warp preserves area, so every cell stands for the same area.
+        let mean = cells.iter().map(|&c| c as f64).sum::<f64>() / cells.len() as f64;
+        let (lo, hi) = cells
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(a, b), &c| (a.min(c), b.max(c)));
+        if !(mean > 0.0) || (hi - lo) as f64 <= 1e-6 * mean {
+            return None;
+        }
+        cells
+            .iter_mut()
+            .for_each(|c| *c = (*c as f64 / mean) as f32);
+        Some(SourceDensity { g, cells })
+    }
+
+    /// The relative density at `(u, v)` in [0,1)².
+    pub fn at(&self, u: f32, v: f32) -> f32 {
+        let cell = |x: f32| ((x * self.g as f32) as u32).min(self.g - 1);
+        self.cells[(cell(u) * self.g + cell(v)) as usize]
     }
 }
 
@@ -119,6 +186,25 @@ pub fn form_factor_with(
     src: &Tri,
     samples: &[Vec3],
     config: &FormFactorConfig,
+    occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
+) -> FormFactor {
+    form_factor_weighted(p, n, src, samples, &[], config, occluded)
+}
+
+/// [`form_factor_with`] for a source whose unshot radiosity is not uniform: `weights[k]` is its
+/// value at sample `k` over its mean (see [`SourceDensity`]; empty: uniform). The result is the
+/// form factor times the mean relative radiosity the receiver sees, so that `ΔB_mean × value` is
+/// the irradiance the shot brings. Each Wallace term is weighted; the analytic form is scaled by
+/// the weighted share of the visible samples, each counted by its point kernel
+/// `cos θ₁ cos θ₂ / r²` (the share of the form factor near it: the nearest parts of the source,
+/// which dominate near the receiver, count most; the Wallace term's disc would understate them).
+pub fn form_factor_weighted(
+    p: Vec3,
+    n: Vec3,
+    src: &Tri,
+    samples: &[Vec3],
+    weights: &[f32],
+    config: &FormFactorConfig,
     mut occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
 ) -> FormFactor {
     let ns = src.normal();
@@ -131,7 +217,9 @@ pub fn form_factor_with(
     let sub_area = area / samples.len() as f32;
     let analytic = sub_area > config.max_disc_bias * std::f32::consts::PI * d_min2;
     let origin = p + n * config.offset;
-    let (mut wallace, mut above, mut visible, mut rays) = (0.0f32, 0u32, 0u32, 0u32);
+    let (mut wallace, mut rays) = (0.0f32, 0u32);
+    let (mut visible, mut above) = (0u32, 0u32);
+    let (mut kernel_visible, mut kernel_above) = (0.0f32, 0.0f32);
     for (k, &x) in samples.iter().enumerate() {
         let r = x - p;
         let len2 = r.length_squared();
@@ -141,22 +229,28 @@ pub fn form_factor_with(
         if cos1 <= 0.0 || cos2 <= 0.0 {
             continue;
         }
+        let term = sub_area * cos1 * cos2 / (std::f32::consts::PI * len2 + sub_area);
+        let kernel = cos1 * cos2 / len2.max(f32::MIN_POSITIVE);
         above += 1;
-        let d = x - origin;
-        let tmax = 1.0 - config.offset / d.length().max(config.offset * 2.0);
+        kernel_above += kernel;
+        let d = x + ns * config.offset - origin;
         rays += 1;
-        if occluded(k, origin, d, tmax) {
+        if occluded(k, origin, d, 1.0) {
             continue;
         }
         visible += 1;
-        wallace += sub_area * cos1 * cos2 / (std::f32::consts::PI * len2 + sub_area);
+        let w = weights.get(k).copied().unwrap_or(1.0);
+        wallace += term * w;
+        kernel_visible += kernel * w;
     }
     let value = if !analytic {
         wallace
     } else if visible == 0 {
         0.0
-    } else {
+    } else if weights.is_empty() {
         point_polygon(p, n, &src.v) * visible as f32 / above as f32
+    } else {
+        point_polygon(p, n, &src.v) * kernel_visible / kernel_above
     };
     FormFactor {
         value,

@@ -7,9 +7,8 @@
 //! that do not); callers apply their exact test to what comes back. Results are sorted and free
 //! of duplicates, so a caller that takes the first match finds the same one a full scan would.
 
-use std::collections::HashMap;
-
-use glam::{IVec3, Vec3};
+use glam::{DVec3, IVec3, Vec3};
+use rustc_hash::FxHashMap;
 
 /// Boxes spanning more cells than this are kept in a list that every query returns, and query
 /// boxes spanning more cells return every item.
@@ -19,7 +18,7 @@ const MAX_CELLS: i64 = 512;
 #[derive(Clone, Debug)]
 pub struct BoxGrid {
     inv_cell: f32,
-    cells: HashMap<IVec3, Vec<u32>>,
+    cells: FxHashMap<IVec3, Vec<u32>>,
     /// Items too large to enter cell by cell.
     large: Vec<u32>,
     /// Every id inserted, for queries too large to answer cell by cell.
@@ -31,7 +30,7 @@ impl BoxGrid {
     pub fn new(cell: f32) -> BoxGrid {
         BoxGrid {
             inv_cell: 1.0 / cell.max(1e-30),
-            cells: HashMap::new(),
+            cells: FxHashMap::default(),
             large: Vec::new(),
             all: Vec::new(),
         }
@@ -134,6 +133,64 @@ impl BoxGrid {
     }
 }
 
+/// Points welded within a distance: [`PointIndex::find`] returns a point already inserted
+/// within `tol` of the query (and accepted by the caller's test), whatever cell boundary lies
+/// between them. Cells are `2 tol` wide and a query looks at the 27 cells around it.
+#[derive(Clone, Debug, Default)]
+pub struct PointIndex {
+    inv_cell: f64,
+    tol2: f64,
+    cells: FxHashMap<[i64; 3], Vec<u32>>,
+}
+
+impl PointIndex {
+    /// An empty index welding points within `tol` (> 0).
+    pub fn new(tol: f64) -> PointIndex {
+        PointIndex {
+            inv_cell: 0.5 / tol,
+            tol2: tol * tol,
+            cells: FxHashMap::default(),
+        }
+    }
+
+    fn key(&self, p: DVec3) -> [i64; 3] {
+        (p * self.inv_cell).floor().as_i64vec3().to_array()
+    }
+
+    /// Returns the first id (in insertion order within a cell) whose point `at(id)` lies within
+    /// `tol` of `p` and which `accept` takes.
+    pub fn find(
+        &self,
+        p: DVec3,
+        at: impl Fn(u32) -> DVec3,
+        accept: impl Fn(u32) -> bool,
+    ) -> Option<u32> {
+        let k = self.key(p);
+        let mut best: Option<(f64, u32)> = None;
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let Some(ids) = self.cells.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
+                        continue;
+                    };
+                    for &id in ids {
+                        let d2 = (at(id) - p).length_squared();
+                        if d2 <= self.tol2 && best.is_none_or(|b| (d2, id) < b) && accept(id) {
+                            best = Some((d2, id));
+                        }
+                    }
+                }
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// Inserts point `p` under `id`.
+    pub fn insert(&mut self, id: u32, p: DVec3) {
+        self.cells.entry(self.key(p)).or_default().push(id);
+    }
+}
+
 fn finish(out: &mut Vec<u32>) {
     out.sort_unstable();
     out.dedup();
@@ -172,6 +229,21 @@ mod test {
             assert!(expected.iter().all(|i| out.binary_search(i).is_ok()));
             assert!(out.windows(2).all(|w| w[0] < w[1]), "sorted, no duplicates");
         }
+    }
+
+    #[test]
+    fn point_index_welds_across_cell_boundaries() {
+        let points = [
+            DVec3::new(0.999_999, 0.0, 0.0),
+            DVec3::new(1.000_001, 0.0, 0.0),
+            DVec3::new(1.1, 0.0, 0.0),
+        ];
+        let mut index = PointIndex::new(1e-3);
+        index.insert(0, points[0]);
+        let at = |i: u32| points[i as usize];
+        assert_eq!(index.find(points[1], at, |_| true), Some(0));
+        assert_eq!(index.find(points[1], at, |_| false), None);
+        assert_eq!(index.find(points[2], at, |_| true), None);
     }
 
     #[test]

@@ -9,7 +9,9 @@
 
 use glam::Vec3;
 
-use crate::formfactor::{FormFactorConfig, form_factor, source_samples};
+use crate::formfactor::{
+    FormFactorConfig, SourceDensity, form_factor_weighted, source_samples_weighted,
+};
 use crate::geom::Tri;
 use crate::mesh::Vertex;
 use crate::octree::{Octree, Traversal};
@@ -73,18 +75,41 @@ pub fn shoot_batch(
     seed: u64,
     out: &mut [f32],
 ) -> BatchStats {
+    shoot_batch_weighted(octree, source, None, points, config, seed, out)
+}
+
+/// [`shoot_batch`] for a source whose unshot radiosity varies as `density` says (see
+/// [`form_factor_weighted`]; `None`: uniform, the same answers as [`shoot_batch`]).
+pub fn shoot_batch_weighted(
+    octree: &Octree,
+    source: &Tri,
+    density: Option<&SourceDensity>,
+    points: &[SamplePoint],
+    config: &FormFactorConfig,
+    seed: u64,
+    out: &mut [f32],
+) -> BatchStats {
     let mut rng = Pcg32::new(seed, 0x5eed);
     let mut samples = Vec::with_capacity(config.rays as usize + 8);
+    let mut weights = Vec::with_capacity(config.rays as usize + 8);
     let mut stats = BatchStats::default();
     for (p, o) in points.iter().zip(out.iter_mut()) {
-        source_samples(source, config.rays, &mut rng, &mut samples);
-        let f = form_factor(
-            Some(octree),
+        source_samples_weighted(
+            source,
+            config.rays,
+            density,
+            &mut rng,
+            &mut samples,
+            &mut weights,
+        );
+        let f = form_factor_weighted(
             Vec3::from(p.eval),
             Vec3::from(p.normal),
             source,
             &samples,
+            &weights,
             config,
+            |_, origin, d, tmax| octree.occluded(origin, d, 0.0, tmax, Traversal::Ropes),
         );
         *o = f.value;
         stats.form_factors += 1;

@@ -25,6 +25,7 @@ pub mod mesh;
 pub mod octree;
 pub mod output;
 pub mod packet;
+pub mod pathtrace;
 pub mod rng;
 pub mod scene;
 pub mod solver;

@@ -6,31 +6,66 @@
 //! edge split ([`Mesh::split_edge`]) applied to *all* triangles around the edge, so the mesh
 //! stays conforming (no T-junctions) and new sample points re-triangulate their neighbourhood.
 //!
-//! Meshing pipeline ([`Mesh::from_scene`]):
-//! 1. weld vertices by position and normal;
-//! 2. D0 discontinuities: T-junctions (a vertex on another coplanar triangle's edge) and the lines
-//!    where triangles of different planes intersect or abut are split, so no triangle straddles one;
-//! 3. patches: longest-edge bisection until every edge is at most `patch_size`;
-//! 4. elements: further bisection to at most `element_size`; each element remembers its patch.
+//! Meshing pipeline ([`Mesh::from_scene`]); each step runs once and is bounded by its output:
+//! 1. weld corners by position, drop collapsed and duplicate triangles, count degenerate input
+//!    ([`input`]);
+//! 2. D0 discontinuities: each triangle is cut once, into convex pieces, along the segments
+//!    where faces of other planes cross or touch it and along the outlines of parallel faces
+//!    close in front of it, which hide what they cover ([`cuts`], [`piece`]);
+//! 3. the pieces' points are welded by position and normal, each piece edge takes the points of
+//!    its surface lying on it (T-junctions, found once, never split again), and the pieces are
+//!    triangulated;
+//! 4. regions enclosed by contact are hidden and sample points on discontinuities are split,
+//!    one per side ([`surface`]);
+//! 5. patches: longest-edge bisection until every edge is at most `patch_size`;
+//! 6. elements: further bisection to at most `element_size`; each element remembers its patch.
+//!
+//! No step makes an edge shorter than the weld distance (1e-5 of the scene's diagonal), and
+//! bisection never goes below ten times it, so meshing always finishes.
 
-use std::collections::{BinaryHeap, HashMap};
+mod cuts;
+mod input;
+mod piece;
+mod surface;
 
-use glam::Vec3;
+pub use input::InputCounts;
 
-use crate::geom::{Tri, plane_cut_segment};
-use crate::grid::BoxGrid;
+use std::collections::BinaryHeap;
+
+use glam::{DVec2, DVec3, Vec3};
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+use smallvec::SmallVec;
+
+use crate::geom::Tri;
+use crate::grid::{BoxGrid, PointIndex};
 use crate::scene::Scene;
+use piece::{Frame, Piece, Tags};
+
+/// Parallel surfaces closer than this fraction of the scene's diagonal cover each other.
+pub const COVER_GAP: f64 = 1e-3;
+
+/// The weld distance as a fraction of the scene's diagonal.
+pub const WELD: f64 = 1e-5;
 
 /// A sample point: where radiosity is computed and stored.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Vertex {
     /// Position on the surface.
     pub pos: Vec3,
-    /// Unit surface normal.
+    /// Unit surface normal; zero for a hidden point (covered by a surface close in front, or
+    /// enclosed by contact), which receives nothing: the form factor to any source is zero.
     pub normal: Vec3,
     /// Where form factors are evaluated: `pos`, moved slightly inside the surface for vertices on
     /// a surface boundary (exactly on an edge a neighbouring wall is seen edge-on).
     pub eval: Vec3,
+}
+
+impl Vertex {
+    /// Whether the point is hidden (see [`Vertex::normal`]).
+    pub fn hidden(&self) -> bool {
+        self.normal == Vec3::ZERO
+    }
 }
 
 /// A mesh triangle (an element, or a patch before element subdivision).
@@ -57,7 +92,8 @@ impl MeshConfig {
     /// About how many elements meshing `scene` with these sizes makes: each triangle's area over
     /// that of an equilateral element of the element size, or its edge count along the longest
     /// edge for slivers, whichever is more (longest-edge bisection halves edges until they are
-    /// short enough). Callers use it to refuse sizes that would not fit in memory.
+    /// short enough). Discontinuity cuts add to it. Callers use it to refuse or coarsen sizes
+    /// that would not fit in memory before meshing.
     pub fn estimated_elements(&self, scene: &Scene) -> f64 {
         let e = f64::from(self.element_size.min(self.patch_size)).max(1e-30);
         scene
@@ -70,21 +106,40 @@ impl MeshConfig {
             })
             .sum()
     }
+
+    /// These sizes scaled up together until [`MeshConfig::estimated_elements`] is at most
+    /// `budget` (unchanged when it already is).
+    pub fn coarsened(&self, scene: &Scene, budget: f64) -> MeshConfig {
+        let mut config = *self;
+        for _ in 0..200 {
+            if config.estimated_elements(scene) <= budget {
+                break;
+            }
+            config.patch_size *= 1.25;
+            config.element_size *= 1.25;
+        }
+        config
+    }
 }
 
 /// Counts of what meshing did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct MeshStats {
-    /// Triangles after welding (the scene's).
+    /// Scene triangles given to the mesher.
     pub input_triangles: usize,
-    /// Scene triangles dropped because welding merged two of their corners: features smaller
-    /// than the weld distance (1e-5 of the scene's diagonal), as in a scene that spans many
-    /// orders of magnitude.
-    pub collapsed: usize,
-    /// Edge splits at T-junctions.
+    /// Degenerate and irregular input found by welding.
+    #[serde(flatten)]
+    pub input: InputCounts,
+    /// Discontinuity segments applied to triangles (each cuts the pieces it crosses).
+    pub d0_cuts: usize,
+    /// Convex pieces the triangles were cut into.
+    pub pieces: usize,
+    /// Points inserted into piece edges where a point of the same surface lay on them.
     pub t_junction_splits: usize,
-    /// Edge splits along intersection / abutting lines between surfaces.
-    pub d0_splits: usize,
+    /// Elements hidden (covered or enclosed by contact) before subdivision.
+    pub hidden_pieces: usize,
+    /// Sample points split along discontinuities, one per side.
+    pub split_points: usize,
     /// Patches.
     pub patches: usize,
     /// Elements.
@@ -92,6 +147,9 @@ pub struct MeshStats {
     /// Sample points (vertices).
     pub vertices: usize,
 }
+
+/// The elements around each edge, by [`edge_key`].
+type EdgeMap = FxHashMap<(u32, u32), SmallVec<[u32; 2]>>;
 
 /// The mesh.
 #[derive(Clone, Debug, Default)]
@@ -104,7 +162,7 @@ pub struct Mesh {
     pub patches: Vec<Tri>,
     /// Object of each patch.
     pub patch_object: Vec<u32>,
-    edges: HashMap<(u32, u32), Vec<u32>>,
+    edges: EdgeMap,
     /// What meshing did.
     pub stats: MeshStats,
 }
@@ -128,26 +186,53 @@ fn edge_key(a: u32, b: u32) -> (u32, u32) {
     if a < b { (a, b) } else { (b, a) }
 }
 
+/// Points with normals closer than this (cosine) belong to one surface.
+const SAME_SURFACE: f64 = 0.999;
+
+/// A piece of a face with its points welded into vertices.
+struct Welded {
+    face: u32,
+    ids: Vec<u32>,
+    tags: Vec<Tags>,
+    hidden: bool,
+}
+
 impl Mesh {
     /// Meshes a scene (see the module doc for the steps).
     pub fn from_scene(scene: &Scene, config: MeshConfig) -> Mesh {
-        Mesh::build(scene, config, Search::Grid)
-    }
-
-    fn build(scene: &Scene, config: MeshConfig, search: Search) -> Mesh {
-        let eps = 1e-5 * scene.diagonal().max(1e-30);
-        let mut mesh = Mesh::welded(scene, eps);
-        mesh.stats.input_triangles = mesh.elements.len();
-        mesh.stats.t_junction_splits = mesh.split_t_junctions(eps, search);
-        mesh.stats.d0_splits = mesh.split_d0(eps, search);
-        mesh.stats.t_junction_splits += mesh.split_t_junctions(eps, search);
-        mesh.subdivide(config.patch_size.max(eps * 10.0));
+        let diag = f64::from(scene.diagonal()).max(1e-30);
+        let tol = WELD * diag;
+        let input = input::weld(scene, tol);
+        let context = cuts::Context::new(&input, tol, COVER_GAP * diag);
+        let cut: Vec<(Option<Vec<Piece>>, usize)> = (0..input.faces.len())
+            .into_par_iter()
+            .map_init(Vec::new, |near, f| {
+                let (pieces, count) = context.cut_face(f, near);
+                let whole = pieces.len() == 1 && !pieces[0].hidden && count == 0;
+                ((!whole).then_some(pieces), count)
+            })
+            .collect();
+        drop(context);
+        let mut mesh = Mesh::default();
+        mesh.stats.input_triangles = scene.triangles.len();
+        mesh.stats.input = input.counts;
+        mesh.stats.d0_cuts = cut.iter().map(|c| c.1).sum();
+        let welded = mesh.weld_pieces(&input, cut, tol);
+        mesh.stats.pieces = welded.len();
+        let (tags, mut hidden) = mesh.triangulate(&input, welded, tol);
+        mesh.stats.hidden_pieces = hidden.iter().filter(|&&h| h).count();
+        mesh.stats.hidden_pieces += surface::hide_enclosed(&mesh, &tags, &mut hidden);
+        mesh.stats.split_points = surface::split_points(&mut mesh, &tags, &hidden);
+        drop((tags, hidden));
+        mesh.drop_unused_vertices();
+        let floor = (tol * 10.0) as f32;
+        mesh.subdivide(config.patch_size.max(floor));
         mesh.patches = mesh.elements.iter().map(|e| mesh.tri(e)).collect();
         mesh.patch_object = mesh.elements.iter().map(|e| e.object).collect();
         for (i, e) in mesh.elements.iter_mut().enumerate() {
             e.patch = i as u32;
         }
-        mesh.subdivide(config.element_size.max(eps * 10.0));
+        mesh.subdivide(config.element_size.max(floor));
         mesh.set_eval_points();
         mesh.stats.patches = mesh.patches.len();
         mesh.stats.elements = mesh.elements.len();
@@ -164,44 +249,205 @@ impl Mesh {
         self.vertices[v as usize].pos
     }
 
-    /// Welds scene triangles into shared vertices (same position within `eps`, normals within
-    /// about 2.5 degrees).
-    fn welded(scene: &Scene, eps: f32) -> Mesh {
-        let mut mesh = Mesh::default();
-        let mut index: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-        for st in &scene.triangles {
-            let n = st.tri.normal();
-            let v = st.tri.v.map(|p| {
-                let key = (p / (eps * 4.0)).round().as_i64vec3().to_array();
-                let bucket = index.entry(key).or_default();
-                let found = bucket
-                    .iter()
-                    .copied()
-                    .find(|&i| mesh.vertices[i as usize].normal.dot(n) > 0.999);
-                found.unwrap_or_else(|| {
-                    mesh.vertices.push(Vertex {
-                        pos: p,
-                        normal: n,
-                        eval: p,
-                    });
-                    bucket.push(mesh.vertices.len() as u32 - 1);
-                    mesh.vertices.len() as u32 - 1
-                })
-            });
-            if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
-                mesh.stats.collapsed += 1;
+    /// Gives every point of every piece a vertex: one per position (within `tol`) and surface.
+    /// Faces left whole become one piece of their corners.
+    fn weld_pieces(
+        &mut self,
+        input: &input::Input,
+        cut: Vec<(Option<Vec<Piece>>, usize)>,
+        tol: f64,
+    ) -> Vec<Welded> {
+        let mut welder = Welder {
+            index: PointIndex::new(tol),
+            exact: vec![SmallVec::new(); input.positions.len()],
+            at: Vec::new(),
+            normals: Vec::new(),
+        };
+        let mut out = Vec::with_capacity(input.faces.len());
+        for (f, (face, (pieces, _))) in input.faces.iter().zip(cut).enumerate() {
+            let corner = |p: DVec3| {
+                face.v
+                    .into_iter()
+                    .find(|&c| input.positions[c as usize] == p)
+            };
+            let Some(pieces) = pieces else {
+                let ids = face
+                    .v
+                    .map(|c| welder.vertex(self, input.positions[c as usize], face.normal, Some(c)))
+                    .to_vec();
+                out.push(Welded {
+                    face: f as u32,
+                    ids,
+                    tags: vec![Tags::new(); 3],
+                    hidden: false,
+                });
                 continue;
+            };
+            for p in pieces {
+                let ids = p
+                    .pts
+                    .iter()
+                    .map(|x| welder.vertex(self, x.p, face.normal, corner(x.p)))
+                    .collect();
+                out.push(Welded {
+                    face: f as u32,
+                    ids,
+                    tags: p.tags,
+                    hidden: p.hidden,
+                });
             }
-            mesh.push_element(Element {
-                v,
-                object: st.object,
+        }
+        out
+    }
+
+    /// Puts into each piece's edges the vertices of its surface lying on them (T-junctions),
+    /// triangulates the pieces into elements, and returns the discontinuity tags of element
+    /// edges and whether each element is hidden.
+    fn triangulate(
+        &mut self,
+        input: &input::Input,
+        pieces: Vec<Welded>,
+        tol: f64,
+    ) -> (surface::EdgeTags, Vec<bool>) {
+        let mut lengths: Vec<f32> = input
+            .faces
+            .iter()
+            .map(|f| {
+                let p = f.v.map(|i| input.positions[i as usize]);
+                (p[1] - p[0]).length().max((p[2] - p[1]).length()) as f32
+            })
+            .collect();
+        let cell = if lengths.is_empty() {
+            1.0
+        } else {
+            let mid = lengths.len() / 2;
+            *lengths.select_nth_unstable_by(mid, f32::total_cmp).1
+        };
+        let mut grid = BoxGrid::new(cell.max(tol as f32 * 4.0));
+        for (i, v) in self.vertices.iter().enumerate() {
+            grid.insert(i as u32, v.pos, v.pos);
+        }
+        let mesh = &*self;
+        let done: Vec<Triangulated> = pieces
+            .par_chunks(1024)
+            .map(|chunk| {
+                let mut out = Triangulated::default();
+                let mut near = Vec::new();
+                for piece in chunk {
+                    mesh.triangulate_piece(input, piece, &grid, tol, &mut near, &mut out);
+                }
+                out
+            })
+            .collect();
+        drop(pieces);
+        let mut tags = surface::EdgeTags::default();
+        let mut hidden = Vec::new();
+        for d in done {
+            self.stats.t_junction_splits += d.inserted;
+            for (e, h) in d.elements.into_iter().zip(d.hidden) {
+                self.push_element(e);
+                hidden.push(h);
+            }
+            for (key, t) in d.tags {
+                tags.entry(key).or_default().extend(t);
+            }
+        }
+        (tags, hidden)
+    }
+
+    /// One piece: T-junction points into its edges, then ear clipping in its face's frame.
+    fn triangulate_piece(
+        &self,
+        input: &input::Input,
+        piece: &Welded,
+        grid: &BoxGrid,
+        tol: f64,
+        near: &mut Vec<u32>,
+        out: &mut Triangulated,
+    ) {
+        let face = &input.faces[piece.face as usize];
+        let n = piece.ids.len();
+        let mut ids: Vec<u32> = Vec::with_capacity(n);
+        let mut tags: Vec<&Tags> = Vec::with_capacity(n);
+        for i in 0..n {
+            let (a, b) = (piece.ids[i], piece.ids[(i + 1) % n]);
+            ids.push(a);
+            tags.push(&piece.tags[i]);
+            let on = self.points_on_edge(a, b, face.normal, grid, tol, near);
+            out.inserted += on.len();
+            for v in on {
+                ids.push(v);
+                tags.push(&piece.tags[i]);
+            }
+        }
+        let corners = face.v.map(|c| input.positions[c as usize]);
+        let frame = Frame::of(corners, face.normal);
+        let q: Vec<DVec2> = ids
+            .iter()
+            .map(|&v| frame.to_2d(self.pos(v).as_dvec3()))
+            .collect();
+        let min_area = tol * tol;
+        let tris = if ids.len() == 3 {
+            vec![[0, 1, 2]]
+        } else {
+            piece::triangulate(&q, min_area, tol)
+        };
+        for t in tris {
+            out.elements.push(Element {
+                v: t.map(|k| ids[k]),
+                object: face.object,
                 patch: 0,
             });
+            out.hidden.push(piece.hidden);
         }
-        if mesh.stats.collapsed > 0 {
-            mesh.drop_unused_vertices();
+        let m = ids.len();
+        for i in 0..m {
+            if !tags[i].is_empty() {
+                out.tags
+                    .push((edge_key(ids[i], ids[(i + 1) % m]), tags[i].clone()));
+            }
         }
-        mesh
+    }
+
+    /// The vertices of the surface with normal `n` lying on edge `(a, b)` (within `tol` of it,
+    /// farther than `tol` from its ends), ordered from `a` to `b`.
+    fn points_on_edge(
+        &self,
+        a: u32,
+        b: u32,
+        n: DVec3,
+        grid: &BoxGrid,
+        tol: f64,
+        near: &mut Vec<u32>,
+    ) -> SmallVec<[u32; 2]> {
+        let (pa, pb) = (self.pos(a).as_dvec3(), self.pos(b).as_dvec3());
+        let ab = pb - pa;
+        let len2 = ab.length_squared();
+        if len2 <= 4.0 * tol * tol {
+            return SmallVec::new();
+        }
+        grid.query_segment(self.pos(a), self.pos(b), tol as f32, near);
+        let mut on: SmallVec<[(f64, u32); 2]> = near
+            .iter()
+            .copied()
+            .filter(|&v| v != a && v != b)
+            .filter_map(|v| {
+                let vx = &self.vertices[v as usize];
+                if vx.normal.as_dvec3().dot(n) <= SAME_SURFACE {
+                    return None;
+                }
+                let p = vx.pos.as_dvec3();
+                let s = (p - pa).dot(ab) / len2;
+                let inside = s > 0.0
+                    && s < 1.0
+                    && (pa + ab * s - p).length() <= tol
+                    && (p - pa).length() > tol
+                    && (p - pb).length() > tol;
+                inside.then_some((s, v))
+            })
+            .collect();
+        on.sort_by(|x, y| x.0.total_cmp(&y.0));
+        on.into_iter().map(|(_, v)| v).collect()
     }
 
     /// Removes the vertices no element uses (left by triangles that welding collapsed) and
@@ -242,6 +488,19 @@ impl Mesh {
         id
     }
 
+    /// Rebuilds the edge map from the elements.
+    fn rebuild_edges(&mut self) {
+        self.edges.clear();
+        for (i, e) in self.elements.iter().enumerate() {
+            for k in 0..3 {
+                self.edges
+                    .entry(edge_key(e.v[k], e.v[(k + 1) % 3]))
+                    .or_default()
+                    .push(i as u32);
+            }
+        }
+    }
+
     /// Splits edge `(a, b)` at vertex `m` in every element that has it, keeping the mesh
     /// conforming. Returns the elements that were split (each keeps its index and shrinks; the
     /// other halves are appended).
@@ -250,9 +509,10 @@ impl Mesh {
         for &t in &around {
             let e = self.elements[t as usize];
             // Rotate so that the split edge is v[0] -> v[1].
-            let i = (0..3)
-                .find(|&i| edge_key(e.v[i], e.v[(i + 1) % 3]) == edge_key(a, b))
-                .unwrap_or(0);
+            let Some(i) = (0..3).find(|&i| edge_key(e.v[i], e.v[(i + 1) % 3]) == edge_key(a, b))
+            else {
+                continue;
+            };
             let (x, y, c) = (e.v[i], e.v[(i + 1) % 3], e.v[(i + 2) % 3]);
             self.elements[t as usize].v = [x, m, c];
             let t2 = self.elements.len() as u32;
@@ -267,7 +527,7 @@ impl Mesh {
                 .or_default()
                 .extend([t, t2]);
         }
-        around
+        around.to_vec()
     }
 
     /// Adds a vertex on edge `(a, b)` at `p` (normal and inset taken from the edge's ends).
@@ -329,168 +589,6 @@ impl Mesh {
         list
     }
 
-    /// Splits coplanar triangles' edges at vertices lying inside them (T-junctions). Each sweep
-    /// splits every edge at every vertex found on it; the edges those splits create are looked
-    /// at by the next sweep.
-    fn split_t_junctions(&mut self, eps: f32, search: Search) -> usize {
-        let mut splits = 0;
-        for _sweep in 0..64 {
-            let found = self.t_junctions(eps, search);
-            if found.is_empty() {
-                break;
-            }
-            for ((a, b), on_edge) in found {
-                let mut from = a;
-                for v in on_edge {
-                    if !self.edges.contains_key(&edge_key(from, b)) {
-                        break;
-                    }
-                    splits += self.split_edge(from, b, v).len().min(1);
-                    from = v;
-                }
-            }
-        }
-        splits
-    }
-
-    /// Returns each edge `(a, b)` (in edge order) with the vertices of the same surface lying
-    /// inside it, ordered from `a` to `b`.
-    fn t_junctions(&self, eps: f32, search: Search) -> Vec<((u32, u32), Vec<u32>)> {
-        let edges = self.edge_list();
-        let mut lengths: Vec<f32> = edges
-            .iter()
-            .map(|&(a, b)| (self.pos(a) - self.pos(b)).length())
-            .collect();
-        if lengths.is_empty() {
-            return Vec::new();
-        }
-        let mid = lengths.len() / 2;
-        let cell = lengths
-            .select_nth_unstable_by(mid, f32::total_cmp)
-            .1
-            .max(eps);
-        let mut grid = BoxGrid::new(cell);
-        for (v, vert) in self.vertices.iter().enumerate() {
-            grid.insert(v as u32, vert.pos, vert.pos);
-        }
-        let mut near = Vec::new();
-        let mut found = Vec::new();
-        for (a, b) in edges {
-            let (pa, pb) = (self.pos(a), self.pos(b));
-            let n = self.vertices[a as usize].normal;
-            let ab = pb - pa;
-            match search {
-                Search::Grid => grid.query_segment(pa, pb, eps, &mut near),
-                Search::Everything => near = (0..self.vertices.len() as u32).collect(),
-            }
-            let mut on_edge: Vec<(f32, u32)> = near
-                .iter()
-                .copied()
-                .filter(|&v| v != a && v != b)
-                .filter(|&v| self.vertices[v as usize].normal.dot(n) >= 0.999)
-                .filter_map(|v| {
-                    let p = self.pos(v);
-                    let s = (p - pa).dot(ab) / ab.length_squared();
-                    (s > 1e-4 && s < 1.0 - 1e-4 && (pa + ab * s - p).length() < eps)
-                        .then_some((s, v))
-                })
-                .collect();
-            if !on_edge.is_empty() {
-                on_edge.sort_by(|x, y| x.0.total_cmp(&y.0));
-                found.push(((a, b), on_edge.into_iter().map(|(_, v)| v).collect()));
-            }
-        }
-        found
-    }
-
-    /// Splits triangles along the segments where triangles of other planes cut or touch them.
-    fn split_d0(&mut self, eps: f32, search: Search) -> usize {
-        let base: Vec<Tri> = self.elements.iter().map(|e| self.tri(e)).collect();
-        let boxes: Vec<(Vec3, Vec3)> = base.iter().map(|t| padded_box(t, eps)).collect();
-        let grid = BoxGrid::over(&boxes);
-        let mut near = Vec::new();
-        let mut cuts: Vec<(Vec3, Vec3, Vec3)> = Vec::new(); // (p, q, plane normal)
-        for (i, a) in base.iter().enumerate() {
-            match search {
-                Search::Grid => grid.query_box(boxes[i].0, boxes[i].1, &mut near),
-                Search::Everything => near = (0..base.len() as u32).collect(),
-            }
-            for &j in &near {
-                let b = &base[j as usize];
-                if i == j as usize
-                    || a.normal().dot(b.normal()).abs() > 0.999
-                    || !boxes_touch(a, b, eps)
-                {
-                    continue;
-                }
-                if let Some((p, q)) = plane_cut_segment(a, b, eps) {
-                    cuts.push((p, q, a.normal()));
-                }
-            }
-        }
-        let mut index = ElementIndex::new(self, eps);
-        let mut splits = 0;
-        for (p, q, n) in cuts {
-            for _guard in 0..256 {
-                match search {
-                    Search::Grid => index.candidates(self, p, q, &mut near),
-                    Search::Everything => near = (0..self.elements.len() as u32).collect(),
-                }
-                let Some(t) = self.find_straddler(&near, p, q, n, eps) else {
-                    break;
-                };
-                splits += self.cut_element(t, p, q, n, eps);
-            }
-        }
-        splits
-    }
-
-    /// Finds the first of `candidates` in the plane of segment `(p, q)` whose interior the
-    /// segment crosses.
-    fn find_straddler(
-        &self,
-        candidates: &[u32],
-        p: Vec3,
-        q: Vec3,
-        n: Vec3,
-        eps: f32,
-    ) -> Option<usize> {
-        let m = n.cross(q - p).normalize_or_zero();
-        candidates.iter().map(|&c| c as usize).find(|&c| {
-            let t = self.tri(&self.elements[c]);
-            let tn = t.normal();
-            if tn.dot(n) < 0.999 || tn.dot(p - t.v[0]).abs() > eps || tn.dot(q - t.v[0]).abs() > eps
-            {
-                return false;
-            }
-            let s = t.v.map(|v| m.dot(v - p));
-            if s.iter().all(|&x| x <= eps) || s.iter().all(|&x| x >= -eps) {
-                return false;
-            }
-            segment_crosses_interior(&t, p, q, eps)
-        })
-    }
-
-    /// Cuts element `t` along the line through `p`, `q`; returns the edge splits made.
-    fn cut_element(&mut self, t: usize, p: Vec3, q: Vec3, n: Vec3, eps: f32) -> usize {
-        let m = n.cross(q - p).normalize_or_zero();
-        let e = self.elements[t];
-        let mut crossings = Vec::new();
-        for i in 0..3 {
-            let (a, b) = (e.v[i], e.v[(i + 1) % 3]);
-            let (sa, sb) = (m.dot(self.pos(a) - p), m.dot(self.pos(b) - p));
-            if (sa > eps && sb < -eps) || (sa < -eps && sb > eps) {
-                let x = self.pos(a) + (self.pos(b) - self.pos(a)) * (sa / (sa - sb));
-                crossings.push((a, b, x));
-            }
-        }
-        for &(a, b, x) in &crossings {
-            let v = self.add_edge_vertex(a, b, x);
-            self.split_edge(a, b, v);
-        }
-        crossings.len()
-    }
-
     /// Moves the evaluation point of boundary vertices slightly into their surface.
     fn set_eval_points(&mut self) {
         let mut pull = vec![Vec3::ZERO; self.vertices.len()];
@@ -525,249 +623,52 @@ impl Mesh {
     }
 }
 
-/// How D0 splitting finds candidates: through grids (the real thing), or by scanning everything
-/// (the slow oracle the tests compare it with; both must give the same mesh).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Search {
-    Grid,
-    #[cfg_attr(not(test), allow(dead_code))]
-    Everything,
+/// Assigns vertices to points: exact matches with a scene corner first, then any point within
+/// the weld distance of the same surface.
+struct Welder {
+    index: PointIndex,
+    /// Vertices made at each scene corner.
+    exact: Vec<SmallVec<[u32; 1]>>,
+    at: Vec<DVec3>,
+    normals: Vec<DVec3>,
 }
 
-/// A grid over the elements, kept up to date as cuts add elements: a new half lies inside the
-/// box of the element it was cut from, and a cut element only shrinks, so every element stays in
-/// (at least) the cells of its own box.
-struct ElementIndex {
-    grid: BoxGrid,
-    /// Elements `0..inserted` are in the grid.
+impl Welder {
+    fn vertex(&mut self, mesh: &mut Mesh, p: DVec3, n: DVec3, corner: Option<u32>) -> u32 {
+        let normals = &self.normals;
+        let same = |v: u32| normals[v as usize].dot(n) > SAME_SURFACE;
+        let exact = corner.and_then(|c| self.exact[c as usize].iter().copied().find(|&v| same(v)));
+        if let Some(v) = exact {
+            return v;
+        }
+        let found = self.index.find(p, |i| self.at[i as usize], same);
+        let v = found.unwrap_or_else(|| {
+            mesh.vertices.push(Vertex {
+                pos: p.as_vec3(),
+                normal: n.as_vec3(),
+                eval: p.as_vec3(),
+            });
+            self.normals.push(n);
+            self.at.push(p);
+            let v = self.at.len() as u32 - 1;
+            self.index.insert(v, p);
+            v
+        });
+        if let Some(c) = corner {
+            self.exact[c as usize].push(v);
+        }
+        v
+    }
+}
+
+/// What triangulating a run of pieces made.
+#[derive(Default)]
+struct Triangulated {
+    elements: Vec<Element>,
+    hidden: Vec<bool>,
+    tags: Vec<((u32, u32), Tags)>,
     inserted: usize,
-    eps: f32,
-}
-
-impl ElementIndex {
-    fn new(mesh: &Mesh, eps: f32) -> ElementIndex {
-        let boxes: Vec<(Vec3, Vec3)> = mesh
-            .elements
-            .iter()
-            .map(|e| padded_box(&mesh.tri(e), eps))
-            .collect();
-        ElementIndex {
-            grid: BoxGrid::over(&boxes),
-            inserted: boxes.len(),
-            eps,
-        }
-    }
-
-    /// Puts into `out`, in increasing order, every element that may meet segment `(p, q)`.
-    fn candidates(&mut self, mesh: &Mesh, p: Vec3, q: Vec3, out: &mut Vec<u32>) {
-        for i in self.inserted..mesh.elements.len() {
-            let (lo, hi) = padded_box(&mesh.tri(&mesh.elements[i]), self.eps);
-            self.grid.insert(i as u32, lo, hi);
-        }
-        self.inserted = mesh.elements.len();
-        self.grid.query_segment(p, q, self.eps, out);
-    }
-}
-
-/// The triangle's bounding box, widened by `eps`.
-fn padded_box(t: &Tri, eps: f32) -> (Vec3, Vec3) {
-    let e = Vec3::splat(eps);
-    (
-        t.v[0].min(t.v[1]).min(t.v[2]) - e,
-        t.v[0].max(t.v[1]).max(t.v[2]) + e,
-    )
-}
-
-fn boxes_touch(a: &Tri, b: &Tri, eps: f32) -> bool {
-    let (alo, ahi) = (
-        a.v[0].min(a.v[1]).min(a.v[2]),
-        a.v[0].max(a.v[1]).max(a.v[2]),
-    );
-    let (blo, bhi) = (
-        b.v[0].min(b.v[1]).min(b.v[2]),
-        b.v[0].max(b.v[1]).max(b.v[2]),
-    );
-    !(alo.cmpgt(bhi + Vec3::splat(eps)).any() || blo.cmpgt(ahi + Vec3::splat(eps)).any())
-}
-
-/// True when the segment `(p, q)` (in the triangle's plane) has a piece of positive length
-/// strictly inside the triangle.
-fn segment_crosses_interior(t: &Tri, p: Vec3, q: Vec3, eps: f32) -> bool {
-    let n = t.normal();
-    let (mut s0, mut s1) = (0.0f32, 1.0f32);
-    for i in 0..3 {
-        let (a, b) = (t.v[i], t.v[(i + 1) % 3]);
-        let inward = n.cross(b - a).normalize_or_zero();
-        let (dp, dq) = (inward.dot(p - a) - eps, inward.dot(q - a) - eps);
-        if dp < 0.0 && dq < 0.0 {
-            return false;
-        }
-        if dp < 0.0 {
-            s0 = s0.max(dp / (dp - dq));
-        } else if dq < 0.0 {
-            s1 = s1.min(dp / (dp - dq));
-        }
-    }
-    (s1 - s0) * (q - p).length() > eps
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scene::cornell;
-
-    #[test]
-    fn cornell_floor_is_cut_along_the_block_footprints() {
-        let scene = cornell::load(true).expect("scene");
-        let mesh = meshed(&scene, 1000.0);
-        assert!(mesh.stats.d0_splits > 0, "{:?}", mesh.stats);
-        // No floor element straddles the line of the short block's front face (z from 65 to 114).
-        let (p, q) = (Vec3::new(130.0, 0.0, 65.0), Vec3::new(290.0, 0.0, 114.0));
-        let all: Vec<u32> = (0..mesh.elements.len() as u32).collect();
-        assert!(mesh.find_straddler(&all, p, q, Vec3::Y, 1e-3).is_none());
-    }
-
-    /// `scene` meshed with patches and elements of at most `size`.
-    fn meshed(scene: &Scene, size: f32) -> Mesh {
-        Mesh::from_scene(
-            scene,
-            MeshConfig {
-                patch_size: size,
-                element_size: size,
-            },
-        )
-    }
-
-    /// A scene of one object from triangles in the plane y = 0 given by (x, z) corners.
-    fn flat_scene(tris: &[[(f32, f32); 3]]) -> Scene {
-        use crate::scene::{Object, SceneTri};
-        let v = |(x, z): (f32, f32)| Vec3::new(x, 0.0, z);
-        Scene {
-            objects: vec![Object {
-                name: "floor".into(),
-                reflectance: Vec3::splat(0.5),
-                emission: Vec3::ZERO,
-            }],
-            triangles: tris
-                .iter()
-                .map(|t| SceneTri {
-                    tri: Tri::new(v(t[0]), v(t[1]), v(t[2])),
-                    object: 0,
-                })
-                .collect(),
-            ..Scene::default()
-        }
-    }
-
-    /// A 100 x 10 strip (two triangles) under a strip cut into 100 columns: 99 vertices lie
-    /// inside the first strip's top edge.
-    fn strip_scene() -> Scene {
-        let mut tris = vec![
-            [(0.0, 0.0), (0.0, 10.0), (100.0, 10.0)],
-            [(0.0, 0.0), (100.0, 10.0), (100.0, 0.0)],
-        ];
-        for i in 0..100 {
-            let (x0, x1) = (i as f32, i as f32 + 1.0);
-            tris.push([(x0, 10.0), (x0, 20.0), (x1, 20.0)]);
-            tris.push([(x0, 10.0), (x1, 20.0), (x1, 10.0)]);
-        }
-        flat_scene(&tris)
-    }
-
-    #[test]
-    fn grid_search_meshes_exactly_as_scanning_everything() {
-        let config = MeshConfig {
-            patch_size: 1e6,
-            element_size: 1e6,
-        };
-        for scene in [cornell::load(true).expect("scene"), strip_scene()] {
-            let fast = Mesh::build(&scene, config, Search::Grid);
-            let slow = Mesh::build(&scene, config, Search::Everything);
-            assert!(
-                fast.stats.d0_splits + fast.stats.t_junction_splits > 10,
-                "{:?}",
-                fast.stats
-            );
-            assert_eq!(fast.stats, slow.stats);
-            assert_eq!(fast.vertices, slow.vertices);
-            assert_eq!(fast.elements, slow.elements);
-        }
-    }
-
-    #[test]
-    fn every_t_junction_along_a_long_edge_is_split() {
-        // All 99 T-junctions must be split, leaving a conforming mesh.
-        let mesh = meshed(&strip_scene(), 1e3);
-        assert_eq!(mesh.stats.t_junction_splits, 99);
-        for (a, b) in mesh.edge_list() {
-            let n = mesh.elements_on_edge(a, b).len();
-            let mid = (mesh.vertices[a as usize].pos + mesh.vertices[b as usize].pos) * 0.5;
-            let outer = mid.x == 0.0 || mid.x == 100.0 || mid.z == 0.0 || mid.z == 20.0;
-            assert_eq!(n, if outer { 1 } else { 2 }, "edge {a}-{b} at {mid}");
-        }
-    }
-
-    #[test]
-    fn triangles_below_the_weld_distance_are_left_out_not_meshed_forever() {
-        // A scene 1e8 across with a triangle 0.5 across: welding (1e-5 of the diagonal) merges
-        // its corners. Meshing it would split a zero-length edge without end; it is counted
-        // and left out instead.
-        let scene = flat_scene(&[
-            [(0.0, 0.0), (0.0, 1e8), (1e8, 0.0)],
-            [(1.0, 1.0), (1.0, 1.5), (1.5, 1.0)],
-        ]);
-        let mesh = meshed(&scene, 5e7);
-        assert_eq!(mesh.stats.collapsed, 1);
-        assert!(mesh.elements.len() < 100, "{}", mesh.elements.len());
-        // The collapsed triangle leaves no sample point behind.
-        let mut used = vec![false; mesh.vertices.len()];
-        mesh.elements
-            .iter()
-            .flat_map(|e| e.v)
-            .for_each(|v| used[v as usize] = true);
-        assert!(used.iter().all(|&u| u));
-    }
-
-    #[test]
-    fn t_junction_is_split() {
-        // A square: the lower-left half is one triangle; the upper-right half is two triangles
-        // meeting at the midpoint of the diagonal, which is a T-junction on the first.
-        let tris = [
-            [(0.0, 0.0), (0.0, 2.0), (2.0, 0.0)],
-            [(0.0, 2.0), (2.0, 2.0), (1.0, 1.0)],
-            [(2.0, 2.0), (2.0, 0.0), (1.0, 1.0)],
-        ];
-        let scene = flat_scene(&tris);
-        let mesh = meshed(&scene, 10.0);
-        assert_eq!(mesh.stats.t_junction_splits, 1);
-        assert_eq!(mesh.elements.len(), 4);
-        assert_eq!(mesh.vertices.len(), 5);
-        for (a, b) in mesh.edge_list() {
-            let n = mesh.elements_on_edge(a, b).len();
-            let boundary = (mesh.vertices[a as usize].pos + mesh.vertices[b as usize].pos) * 0.5;
-            let on_boundary = [boundary.x, boundary.z]
-                .iter()
-                .any(|&c| c == 0.0 || c == 2.0);
-            assert_eq!(n, if on_boundary { 1 } else { 2 }, "edge {a}-{b}");
-        }
-    }
-
-    #[test]
-    fn mesh_is_conforming_every_edge_has_one_or_two_elements() {
-        let scene = cornell::load(true).expect("scene");
-        let mesh = Mesh::from_scene(
-            &scene,
-            MeshConfig {
-                patch_size: 150.0,
-                element_size: 60.0,
-            },
-        );
-        for (a, b) in mesh.edge_list() {
-            let n = mesh.elements_on_edge(a, b).len();
-            assert!(n == 1 || n == 2, "edge {a}-{b} has {n} elements");
-        }
-        let total: f64 = mesh.object_areas(scene.objects.len()).iter().sum();
-        let scene_area: f64 = scene.triangles.iter().map(|t| t.tri.area() as f64).sum();
-        assert!((total - scene_area).abs() < 1e-4 * scene_area);
-    }
-}
+mod tests;

@@ -2,9 +2,17 @@
 //! malformed input is reported with its file and line (tobj's own errors carry no line).
 //!
 //! Conventions: `Kd` is the diffuse reflectance, `Ke` the emitted radiance (RGB), object names come
-//! from `o` or `g`, and a comment line `# camera: pos (x y z) dir (x y z) up (x y z) fov DEG` gives
-//! the view used for `image.png`. The loader takes text, never paths: the caller supplies the OBJ
-//! text and a function that returns the text of a named material library.
+//! from `o` or `g`, and a comment line `# camera: pos (x y z) dir (x y z) up (x y z) fov DEG` (or
+//! `look (x y z)`, a point looked at, instead of `dir`) gives the view used for `image.png`.
+//!
+//! Files as real exporters write them: CRLF line ends; bytes that are not UTF-8 (read as
+//! Latin-1, see [`decode`]); statements we do not use, counted and listed in
+//! [`Scene::left_out`]; non-diffuse materials (specular, mirror, glass, textured) replaced by
+//! their diffuse approximation (`Kd`, times the mean colour of a `map_Kd` PNG texture when one
+//! can be read; `Ks` when there is no `Kd`), with a note listing them. The loader takes text,
+//! never paths: the caller supplies the OBJ text and a [`Files`] that returns material
+//! libraries and textures by the name the file gives (see [`SearchFiles`] for the usual
+//! search).
 
 use std::collections::HashMap;
 use std::io::BufReader;
@@ -12,6 +20,75 @@ use std::io::BufReader;
 use glam::Vec3;
 
 use crate::geom::Tri;
+
+/// Returns the text of a scene file's bytes: UTF-8 when they are, otherwise each byte as its
+/// Latin-1 character (exporters write names and comments in the local code page), with `true`.
+pub fn decode(bytes: &[u8]) -> (String, bool) {
+    match std::str::from_utf8(bytes) {
+        Ok(s) => (s.to_string(), false),
+        Err(_) => (bytes.iter().map(|&b| b as char).collect(), true),
+    }
+}
+
+/// Where the loader gets the files a scene names.
+pub trait Files {
+    /// The text of material library `name` (as written after `mtllib`), or why not.
+    fn library(&self, name: &str) -> Result<String, String>;
+    /// The bytes of texture `name` (as written in a material library), or why not.
+    fn texture(&self, name: &str) -> Result<Vec<u8>, String> {
+        Err(format!("no texture `{name}`"))
+    }
+}
+
+impl<F: Fn(&str) -> Result<String, String>> Files for F {
+    fn library(&self, name: &str) -> Result<String, String> {
+        self(name)
+    }
+}
+
+/// Files looked up relative to the scene's folder, then the working folder. A failure names
+/// every path tried.
+pub struct SearchFiles {
+    /// Folders to try, in order.
+    pub folders: Vec<std::path::PathBuf>,
+}
+
+impl SearchFiles {
+    /// The folder of `scene`, then the working folder.
+    pub fn beside(scene: &std::path::Path) -> SearchFiles {
+        let dir = scene
+            .parent()
+            .map(std::path::Path::to_path_buf)
+            .unwrap_or_default();
+        SearchFiles {
+            folders: vec![dir, std::path::PathBuf::from(".")],
+        }
+    }
+
+    fn read(&self, name: &str) -> Result<Vec<u8>, String> {
+        // Exporters on Windows write backslashes.
+        let name = name.trim().replace('\\', "/");
+        let mut tried = Vec::new();
+        for folder in &self.folders {
+            let path = folder.join(&name);
+            match std::fs::read(&path) {
+                Ok(bytes) => return Ok(bytes),
+                Err(e) => tried.push(format!("{} ({e})", path.display())),
+            }
+        }
+        Err(format!("tried {}", tried.join(", ")))
+    }
+}
+
+impl Files for SearchFiles {
+    fn library(&self, name: &str) -> Result<String, String> {
+        self.read(name).map(|b| decode(&b).0)
+    }
+
+    fn texture(&self, name: &str) -> Result<Vec<u8>, String> {
+        self.read(name)
+    }
+}
 
 /// A scene error, always naming the file (and the line where there is one).
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -183,20 +260,26 @@ impl Scene {
 }
 
 /// Parses an OBJ scene. `file` names it in errors; `library` returns the text of a material
-/// library named by `mtllib` (or a reason why it cannot).
+/// library named by `mtllib` (or a reason why it cannot). Textures are not read.
 pub fn load_obj(
     file: &str,
     obj_text: &str,
     library: &dyn Fn(&str) -> Result<String, String>,
 ) -> Result<Scene, SceneError> {
-    let mut checked = check_obj(file, obj_text, library)?;
-    let (models, materials) = run_tobj(file, obj_text, &checked.libraries)?;
+    load_obj_with(file, obj_text, &library)
+}
+
+/// [`load_obj`] with material libraries and textures from `files`.
+pub fn load_obj_with(file: &str, obj_text: &str, files: &dyn Files) -> Result<Scene, SceneError> {
+    let text = obj_text.replace("\r\n", "\n");
+    let mut checked = check_obj(file, &text, files)?;
+    let (models, materials) = run_tobj(file, &text, &checked.libraries)?;
     let mut scene = Scene {
         camera: checked.camera,
         left_out: std::mem::take(&mut checked.left_out),
         ..Scene::default()
     };
-    collect_triangles(&mut scene, &models, &materials);
+    collect_triangles(&mut scene, &models, &materials, &checked.diffuse);
     if scene.triangles.is_empty() {
         return Err(SceneError::NoGeometry { file: file.into() });
     }
@@ -211,22 +294,40 @@ struct Checked {
     camera: Option<Camera>,
     libraries: HashMap<String, String>,
     left_out: Vec<String>,
+    /// The diffuse reflectance to use for each material made diffuse (by name).
+    diffuse: HashMap<String, [f32; 3]>,
+}
+
+/// OBJ statements the loader reads or knowingly skips without a note.
+const OBJ_KNOWN: &[&str] = &["v", "vn", "vt", "f", "mtllib", "usemtl", "o", "g", "s"];
+
+/// Statements met that the loader does not use: keyword -> (count, first line).
+type Unknown = std::collections::BTreeMap<String, (usize, usize)>;
+
+fn note_unknown(unknown: &mut Unknown, key: &str, line: usize) {
+    unknown.entry(key.to_string()).or_insert((0, line)).0 += 1;
+}
+
+fn report_unknown(file: &str, unknown: Unknown, left_out: &mut Vec<String>) {
+    for (key, (count, line)) in unknown {
+        left_out.push(format!(
+            "{file}:{line}: `{key}` statements ignored ({count}): not used by radiosity"
+        ));
+    }
 }
 
 /// Checks every OBJ line that we rely on and every library it names.
-fn check_obj(
-    file: &str,
-    text: &str,
-    library: &dyn Fn(&str) -> Result<String, String>,
-) -> Result<Checked, SceneError> {
+fn check_obj(file: &str, text: &str, files: &dyn Files) -> Result<Checked, SceneError> {
     let mut out = Checked {
         camera: None,
         libraries: HashMap::new(),
         left_out: Vec::new(),
+        diffuse: HashMap::new(),
     };
     let mut materials: Vec<String> = Vec::new();
     let mut vertices = 0usize;
     let (mut normals, mut texcoords) = (false, false);
+    let mut unknown = Unknown::new();
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let trimmed = raw.trim();
@@ -248,13 +349,16 @@ fn check_obj(
             Some("f") => check_face(file, line, words, vertices)?,
             Some("mtllib") => {
                 let name = words.collect::<Vec<_>>().join(" ");
-                let body = library(&name).map_err(|reason| SceneError::MissingMaterialLibrary {
-                    file: file.into(),
-                    line,
-                    name: name.clone(),
-                    reason,
-                })?;
-                materials.extend(check_mtl(&name, &body, &mut out.left_out)?);
+                let body = files
+                    .library(&name)
+                    .map_err(|reason| SceneError::MissingMaterialLibrary {
+                        file: file.into(),
+                        line,
+                        name: name.clone(),
+                        reason,
+                    })?
+                    .replace("\r\n", "\n");
+                materials.extend(check_mtl(&name, &body, files, &mut out)?);
                 out.libraries.insert(name, body);
             }
             Some("usemtl") => {
@@ -267,6 +371,9 @@ fn check_obj(
                     });
                 }
             }
+            Some(key) if !key.starts_with('#') && !OBJ_KNOWN.contains(&key) => {
+                note_unknown(&mut unknown, key, line);
+            }
             _ => {}
         }
     }
@@ -277,8 +384,9 @@ fn check_obj(
     }
     if texcoords {
         out.left_out
-            .push("texture coordinates (vt) ignored: textures are not supported".into());
+            .push("texture coordinates (vt) ignored: a texture counts by its mean colour".into());
     }
+    report_unknown(file, unknown, &mut out.left_out);
     Ok(out)
 }
 
@@ -351,19 +459,48 @@ fn check_face<'a>(
     Ok(())
 }
 
-/// Checks a material library's `Kd`/`Ke` lines; returns the material names it defines.
+/// A material as far as being diffuse goes.
+#[derive(Default)]
+struct MaterialNotes {
+    name: String,
+    kd: Option<[f32; 3]>,
+    ks: Option<[f32; 3]>,
+    texture: Option<String>,
+    /// Why it is not diffuse (empty: it is).
+    why: Vec<&'static str>,
+}
+
+/// MTL statements read or knowingly skipped without a note.
+const MTL_KNOWN: &[&str] = &[
+    "newmtl", "Kd", "Ke", "Ka", "Ks", "Ns", "Ni", "d", "Tr", "Tf", "illum",
+];
+
+/// Checks a material library's `Kd`/`Ke` lines; returns the material names it defines and
+/// records the diffuse approximation of each non-diffuse material in `out`.
 fn check_mtl(
     file: &str,
     text: &str,
-    left_out: &mut Vec<String>,
+    files: &dyn Files,
+    out: &mut Checked,
 ) -> Result<Vec<String>, SceneError> {
     let mut names = Vec::new();
+    let mut all: Vec<MaterialNotes> = Vec::new();
+    let mut unknown = Unknown::new();
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let mut words = raw.split_whitespace();
-        match words.next() {
-            Some("newmtl") => names.push(words.collect::<Vec<_>>().join(" ")),
-            Some("Kd") => {
+        let key = words.next();
+        let current = all.last_mut();
+        match (key, current) {
+            (Some("newmtl"), _) => {
+                let name = words.collect::<Vec<_>>().join(" ");
+                names.push(name.clone());
+                all.push(MaterialNotes {
+                    name,
+                    ..MaterialNotes::default()
+                });
+            }
+            (Some("Kd"), m) => {
                 let kd = parse_numbers(file, line, words, 3)?;
                 if kd.iter().any(|&x| !(0.0..=1.0).contains(&x)) {
                     return Err(out_of_range(
@@ -372,8 +509,11 @@ fn check_mtl(
                         "a reflectance Kd must lie in [0, 1]",
                     ));
                 }
+                if let Some(m) = m {
+                    m.kd = Some([kd[0], kd[1], kd[2]]);
+                }
             }
-            Some("Ke") => {
+            (Some("Ke"), _) => {
                 let ke = parse_numbers(file, line, words, 3)?;
                 if ke.iter().any(|&x| x < 0.0) {
                     return Err(out_of_range(
@@ -383,27 +523,112 @@ fn check_mtl(
                     ));
                 }
             }
-            Some(key) if key.starts_with("map_") || key == "bump" || key == "disp" => {
-                left_out.push(format!(
-                    "{file}:{line}: `{key}` ignored: textures are not supported"
-                ));
-            }
-            Some("Ks" | "Ns" | "Ni" | "Tf" | "Tr" | "d" | "illum") => {
-                let msg = format!(
-                    "{file}:{line}: non-diffuse parameters ignored: radiosity is diffuse only"
-                );
-                if !left_out.contains(&msg)
-                    && !left_out
-                        .iter()
-                        .any(|m| m.starts_with(file) && m.contains("non-diffuse"))
-                {
-                    left_out.push(msg);
+            (Some("Ks"), Some(m)) => {
+                if let Ok(ks) = parse_numbers(file, line, words, 3) {
+                    if ks.iter().any(|&x| x > 0.0) {
+                        m.ks = Some([ks[0], ks[1], ks[2]].map(|x| x.clamp(0.0, 1.0)));
+                        m.why.push("specular");
+                    }
                 }
             }
-            _ => {}
+            (Some("Tf"), Some(m)) => {
+                if parse_numbers(file, line, words, 3).is_ok_and(|t| t.iter().any(|&x| x < 1.0)) {
+                    m.why.push("transmissive");
+                }
+            }
+            (Some("d"), Some(m)) => {
+                if parse_numbers(file, line, words, 1).is_ok_and(|t| t[0] < 1.0) {
+                    m.why.push("transparent");
+                }
+            }
+            (Some("Tr"), Some(m)) => {
+                if parse_numbers(file, line, words, 1).is_ok_and(|t| t[0] > 0.0) {
+                    m.why.push("transparent");
+                }
+            }
+            (Some("map_Kd"), Some(m)) => {
+                // Options (-s, -o, ...) come first; the file name is last.
+                m.texture = words.last().map(str::to_string);
+                m.why.push("textured");
+            }
+            (Some(key), _) if key.starts_with('#') || MTL_KNOWN.contains(&key) => {}
+            (Some(key), _) => note_unknown(&mut unknown, key, line),
+            (None, _) => {}
         }
     }
+    report_unknown(file, unknown, &mut out.left_out);
+    let mut made_diffuse = Vec::new();
+    for mut m in all {
+        if m.why.is_empty() {
+            continue;
+        }
+        m.why.dedup();
+        let (rho, how) = diffuse_of(&m, files);
+        made_diffuse.push(format!("{} ({}; {how})", m.name, m.why.join(", ")));
+        out.diffuse.insert(m.name, rho);
+    }
+    if !made_diffuse.is_empty() {
+        out.left_out.push(format!(
+            "{file}: non-diffuse materials made diffuse: {}",
+            made_diffuse.join(", ")
+        ));
+    }
     Ok(names)
+}
+
+/// The diffuse approximation of a material: `Kd` (or `Ks` without `Kd`, or grey 0.5 without
+/// either), times the mean of its texture when that can be read; and how it was made.
+fn diffuse_of(m: &MaterialNotes, files: &dyn Files) -> ([f32; 3], String) {
+    let (base, from) = match (m.kd, m.ks) {
+        (Some(kd), _) => (kd, "Kd"),
+        (None, Some(ks)) => (ks, "Ks, no Kd"),
+        (None, None) => ([0.5; 3], "grey 0.5, no Kd"),
+    };
+    let Some(name) = &m.texture else {
+        return (base, from.to_string());
+    };
+    match files.texture(name).and_then(|bytes| texture_mean(&bytes)) {
+        Ok(mean) => {
+            let rho = std::array::from_fn(|i| (base[i] * mean[i]).clamp(0.0, 1.0));
+            (rho, format!("{from} x mean of {name}"))
+        }
+        Err(why) => (base, format!("{from}; texture {name} not read: {why}")),
+    }
+}
+
+/// The mean linear RGB of a PNG image (sRGB-decoded, alpha ignored).
+fn texture_mean(bytes: &[u8]) -> Result<[f32; 3], String> {
+    if !bytes.starts_with(b"\x89PNG") {
+        return Err("only PNG textures are read".into());
+    }
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = decoder.read_info().map_err(|e| e.to_string())?;
+    let mut buf = vec![0; reader.output_buffer_size().ok_or("image too large")?];
+    let info = reader.next_frame(&mut buf).map_err(|e| e.to_string())?;
+    let channels = info.color_type.samples();
+    let pixels = &buf[..info.buffer_size()];
+    let linear = |b: u8| {
+        let x = f64::from(b) / 255.0;
+        if x <= 0.04045 {
+            x / 12.92
+        } else {
+            ((x + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let mut sum = [0.0f64; 3];
+    let mut n = 0usize;
+    for px in pixels.chunks_exact(channels) {
+        for (c, s) in sum.iter_mut().enumerate() {
+            // Grey images have one (or two, with alpha) channels.
+            *s += linear(px[if channels >= 3 { c } else { 0 }]);
+        }
+        n += 1;
+    }
+    if n == 0 {
+        return Err("empty image".into());
+    }
+    Ok(sum.map(|s| (s / n as f64) as f32))
 }
 
 fn out_of_range(file: &str, line: usize, message: &str) -> SceneError {
@@ -414,8 +639,9 @@ fn out_of_range(file: &str, line: usize, message: &str) -> SceneError {
     }
 }
 
-/// Parses `pos (x y z) dir (x y z) up (x y z) fov DEG`.
-fn parse_camera(text: &str) -> Option<Camera> {
+/// Parses `pos (x y z) dir (x y z) up (x y z) fov DEG` (`look (x y z)`, a point looked at, may
+/// replace `dir`; the parentheses are optional).
+pub fn parse_camera(text: &str) -> Option<Camera> {
     let cleaned: String = text
         .chars()
         .map(|c| if c == '(' || c == ')' { ' ' } else { c })
@@ -437,7 +663,7 @@ fn parse_camera(text: &str) -> Option<Camera> {
             .map(|f| Vec3::new(f[0], f[1], f[2]))
     };
     let fov = fields.get("fov").filter(|f| f.len() == 1)?[0];
-    let dir = v("dir")?;
+    let dir = v("dir").or_else(|| Some(v("look")? - v("pos")?))?;
     let up = v("up")?;
     (dir.length() > 0.0 && up.cross(dir).length() > 0.0 && fov > 0.0 && fov < 180.0).then_some(
         Camera {
@@ -484,7 +710,12 @@ fn run_tobj(
 }
 
 /// Converts tobj models into objects and triangles, dropping degenerate triangles.
-fn collect_triangles(scene: &mut Scene, models: &[tobj::Model], materials: &[tobj::Material]) {
+fn collect_triangles(
+    scene: &mut Scene,
+    models: &[tobj::Model],
+    materials: &[tobj::Material],
+    diffuse: &HashMap<String, [f32; 3]>,
+) {
     let mut object_of: HashMap<(String, Option<usize>), u32> = HashMap::new();
     let positions: Vec<Vec<Vec3>> = models
         .iter()
@@ -504,7 +735,7 @@ fn collect_triangles(scene: &mut Scene, models: &[tobj::Model], materials: &[tob
     for (model, pos) in models.iter().zip(&positions) {
         let key = (model.name.clone(), model.mesh.material_id);
         let object = *object_of.entry(key).or_insert_with(|| {
-            scene.objects.push(object_for(model, materials));
+            scene.objects.push(object_for(model, materials, diffuse));
             scene.objects.len() as u32 - 1
         });
         for f in model.mesh.indices.chunks_exact(3) {
@@ -519,7 +750,11 @@ fn collect_triangles(scene: &mut Scene, models: &[tobj::Model], materials: &[tob
 }
 
 /// Builds an [`Object`] for a tobj model (grey 0.5 when it has no material).
-fn object_for(model: &tobj::Model, materials: &[tobj::Material]) -> Object {
+fn object_for(
+    model: &tobj::Model,
+    materials: &[tobj::Material],
+    diffuse: &HashMap<String, [f32; 3]>,
+) -> Object {
     let material = model.mesh.material_id.and_then(|i| materials.get(i));
     let v = |a: Option<[f32; 3]>, d: f32| a.map(Vec3::from).unwrap_or(Vec3::splat(d));
     let name = if model.name.is_empty() {
@@ -529,7 +764,10 @@ fn object_for(model: &tobj::Model, materials: &[tobj::Material]) -> Object {
     };
     Object {
         name,
-        reflectance: v(material.and_then(|m| m.diffuse), 0.5),
+        reflectance: v(
+            material.and_then(|m| diffuse.get(&m.name).copied().or(m.diffuse)),
+            0.5,
+        ),
         emission: v(material.and_then(|m| m.emissive), 0.0),
     }
 }
@@ -659,5 +897,161 @@ mod tests {
             load_obj("s.obj", text, &lib),
             Err(SceneError::NoEmitters { .. })
         ));
+    }
+
+    /// A one-triangle scene whose light uses material `mat` from library `lib.mtl`.
+    fn one_triangle(mat: &str) -> String {
+        format!("mtllib lib.mtl\nusemtl {mat}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    }
+
+    struct Mem(Vec<(&'static str, Vec<u8>)>);
+
+    impl Files for Mem {
+        fn library(&self, name: &str) -> Result<String, String> {
+            self.texture(name).map(|b| decode(&b).0)
+        }
+        fn texture(&self, name: &str) -> Result<Vec<u8>, String> {
+            self.0
+                .iter()
+                .find(|f| f.0 == name)
+                .map(|f| f.1.clone())
+                .ok_or_else(|| format!("no {name}"))
+        }
+    }
+
+    fn reflectance(mtl: &str, extra: Vec<(&'static str, Vec<u8>)>) -> (Vec3, Vec<String>) {
+        let mut files = vec![("lib.mtl", mtl.as_bytes().to_vec())];
+        files.extend(extra);
+        let scene = load_obj_with("s.obj", &one_triangle("m"), &Mem(files)).expect("scene");
+        (scene.objects[0].reflectance, scene.left_out)
+    }
+
+    #[test]
+    fn non_diffuse_materials_become_diffuse_with_a_note() {
+        let (rho, notes) = reflectance(
+            "newmtl m\nKe 1 1 1\nKd 0.2 0.3 0.4\nKs 0.5 0.5 0.5\n",
+            vec![],
+        );
+        assert_eq!(rho, Vec3::new(0.2, 0.3, 0.4));
+        assert!(
+            notes.iter().any(|n| n.contains("m (specular; Kd)")),
+            "{notes:?}"
+        );
+        // A mirror without Kd takes its Ks.
+        let (rho, notes) = reflectance("newmtl m\nKe 1 1 1\nKs 0.9 0.9 0.9\n", vec![]);
+        assert_eq!(rho, Vec3::splat(0.9));
+        assert!(notes.iter().any(|n| n.contains("Ks, no Kd")), "{notes:?}");
+        // Glass: transmissive and transparent, Kd kept.
+        let (rho, notes) = reflectance(
+            "newmtl m\nKe 1 1 1\nKd 0.1 0.1 0.1\nTf 0.5 0.5 0.5\nd 0.5\n",
+            vec![],
+        );
+        assert_eq!(rho, Vec3::splat(0.1));
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.contains("transmissive, transparent")),
+            "{notes:?}"
+        );
+        // A diffuse material gets no note.
+        let (_, notes) = reflectance("newmtl m\nKe 1 1 1\nKd 0.1 0.1 0.1\nKs 0 0 0\n", vec![]);
+        assert!(notes.is_empty(), "{notes:?}");
+    }
+
+    #[test]
+    fn a_readable_texture_counts_by_its_mean_and_an_unreadable_one_by_kd() {
+        // 2 x 1 pixels: sRGB 255 (linear 1) and 0: mean 0.5 in every channel.
+        let png = crate::output::encode_png(&[255, 255, 255, 0, 0, 0], 2, 1).expect("png");
+        let mtl = "newmtl m\nKe 1 1 1\nKd 0.8 0.8 0.8\nmap_Kd -s 1 1 1 tex.png\n";
+        let (rho, notes) = reflectance(mtl, vec![("tex.png", png)]);
+        assert!((rho - Vec3::splat(0.4)).abs().max_element() < 1e-6, "{rho}");
+        assert!(
+            notes.iter().any(|n| n.contains("mean of tex.png")),
+            "{notes:?}"
+        );
+        let mtl = "newmtl m\nKe 1 1 1\nKd 0.8 0.8 0.8\nmap_Kd tex.jpg\n";
+        let (rho, notes) = reflectance(mtl, vec![("tex.jpg", vec![0xff, 0xd8, 0xff])]);
+        assert_eq!(rho, Vec3::splat(0.8));
+        assert!(notes.iter().any(|n| n.contains("only PNG")), "{notes:?}");
+        let (rho, notes) = reflectance(mtl, vec![]);
+        assert_eq!(rho, Vec3::splat(0.8));
+        assert!(
+            notes.iter().any(|n| n.contains("not read: no tex.jpg")),
+            "{notes:?}"
+        );
+    }
+
+    #[test]
+    fn crlf_and_latin1_files_load() {
+        let lf = "# caf\u{e9}\nmtllib lib.mtl\no caf\u{e9}\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        let latin1: Vec<u8> = lf.chars().map(|c| c as u8).collect();
+        let (text, was_latin1) = decode(&latin1);
+        assert!(was_latin1);
+        let crlf = text.replace('\n', "\r\n");
+        let mtl = Mem(vec![(
+            "lib.mtl",
+            b"newmtl m\r\nKe 1 1 1\r\nKd 0.5 0.5 0.5\r\n".to_vec(),
+        )]);
+        let scene = load_obj_with("s.obj", &crlf, &mtl).expect("scene");
+        assert_eq!(scene.triangles.len(), 1);
+        assert_eq!(scene.objects[0].name, "caf\u{e9}");
+        assert_eq!(scene.objects[0].emission, Vec3::ONE);
+    }
+
+    #[test]
+    fn unknown_statements_are_counted_and_listed() {
+        let text = format!("{}l 1 2\nl 2 3\ncurv 0 1 1 2\n", one_triangle("m"));
+        let files = Mem(vec![("lib.mtl", b"newmtl m\nKe 1 1 1\nPwr 100\n".to_vec())]);
+        let scene = load_obj_with("s.obj", &text, &files).expect("scene");
+        let notes = scene.left_out.join("\n");
+        assert!(
+            notes.contains("s.obj:7: `l` statements ignored (2)"),
+            "{notes}"
+        );
+        assert!(notes.contains("`curv` statements ignored (1)"), "{notes}");
+        assert!(
+            notes.contains("lib.mtl:3: `Pwr` statements ignored (1)"),
+            "{notes}"
+        );
+    }
+
+    #[test]
+    fn material_libraries_are_searched_beside_the_scene_then_in_order_naming_every_path() {
+        let root = std::env::temp_dir().join(format!("occ-mtl-search-{}", std::process::id()));
+        let (a, b) = (root.join("a"), root.join("b"));
+        std::fs::create_dir_all(&a).expect("dir");
+        std::fs::create_dir_all(&b).expect("dir");
+        std::fs::write(b.join("lib.mtl"), "newmtl m\nKe 1 1 1\n").expect("write");
+        let files = SearchFiles {
+            folders: vec![a.clone(), b.clone()],
+        };
+        assert!(load_obj_with("s.obj", &one_triangle("m"), &files).is_ok());
+        let err = load_obj_with(
+            "s.obj",
+            &one_triangle("m").replace("lib.mtl", "nope.mtl"),
+            &files,
+        )
+        .expect_err("missing");
+        let text = err.to_string();
+        assert!(
+            text.contains(&a.join("nope.mtl").display().to_string()),
+            "{text}"
+        );
+        assert!(
+            text.contains(&b.join("nope.mtl").display().to_string()),
+            "{text}"
+        );
+        assert_eq!(
+            SearchFiles::beside(&a.join("scene.obj")).folders,
+            vec![a.clone(), std::path::PathBuf::from(".")]
+        );
+        let _ = std::fs::remove_dir_all(&root);
+    }
+
+    #[test]
+    fn the_camera_comment_takes_a_point_to_look_at() {
+        let cam = parse_camera(" pos 0 0 -5 look 0 0 0 up 0 1 0 fov 40").expect("camera");
+        assert_eq!(cam.dir, Vec3::Z);
+        assert!(parse_camera("pos 0 0 0 look 0 0 0 up 0 1 0 fov 40").is_none());
     }
 }

@@ -15,11 +15,17 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-use crate::formfactor::FormFactorConfig;
-use crate::kernels::{SamplePoint, shoot_batch};
+use crate::formfactor::{FormFactorConfig, SourceDensity};
+use crate::geom::Tri;
+use crate::kernels::{SamplePoint, shoot_batch_weighted};
 use crate::mesh::Mesh;
 use crate::octree::{Octree, OctreeConfig};
 use crate::scene::Scene;
+
+/// Cells per side of the grid that tabulates a shooting patch's unshot radiosity
+/// ([`SourceDensity`]): finer than the elements of a patch at the default sizes (a patch is
+/// about five elements across), so each element's share is seen.
+const DENSITY_GRID: u32 = 24;
 
 /// When to stop shooting.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -30,15 +36,18 @@ pub enum Until {
     Shots(u64),
     /// Stop after this many seconds.
     Seconds(f64),
+    /// Stop when the estimated relative error of every object's mean radiosity is at most this
+    /// (see [`Solver::estimated_errors`]).
+    Error(f64),
 }
 
 impl std::str::FromStr for Until {
     type Err = String;
-    /// Parses `unshot=0.001`, `shots=N` or `time=S`.
+    /// Parses `unshot=0.001`, `shots=N`, `time=S` or `error=0.005`.
     fn from_str(s: &str) -> Result<Self, String> {
         let (key, value) = s
             .split_once('=')
-            .ok_or_else(|| format!("`{s}`: expected unshot=F, shots=N or time=S"))?;
+            .ok_or_else(|| format!("`{s}`: expected error=F, unshot=F, shots=N or time=S"))?;
         let bad = |_| format!("`{value}` is not a valid number for `{key}`");
         match key {
             "unshot" => value
@@ -53,8 +62,12 @@ impl std::str::FromStr for Until {
                 .parse::<f64>()
                 .map_err(bad)
                 .and_then(|v| finite_non_negative(v).map(Until::Seconds)),
+            "error" => value
+                .parse::<f64>()
+                .map_err(bad)
+                .and_then(|v| finite_non_negative(v).map(Until::Error)),
             _ => Err(format!(
-                "unknown stopping rule `{key}` (expected unshot, shots or time)"
+                "unknown stopping rule `{key}` (expected error, unshot, shots or time)"
             )),
         }
     }
@@ -202,6 +215,12 @@ pub struct Solver<'a> {
     config: SolverConfig,
     patch_area: Vec<f64>,
     element_area: Vec<f64>,
+    /// Unshot power of each element (a patch's is the sum over its elements): where on the
+    /// patch the power it shoots comes from.
+    element_unshot: Vec<DVec3>,
+    /// Power shot so far, and the part of it that surfaces received (the rest escaped).
+    shot_total: DVec3,
+    received_total: DVec3,
 }
 
 impl<'a> Solver<'a> {
@@ -215,14 +234,19 @@ impl<'a> Solver<'a> {
             .iter()
             .map(|e| mesh.tri(e).area() as f64)
             .collect();
-        let unshot: Vec<DVec3> = mesh
-            .patch_object
+        let element_area: Vec<f64> = element_area;
+        let element_unshot: Vec<DVec3> = mesh
+            .elements
             .iter()
-            .zip(&patch_area)
-            .map(|(&o, &a)| {
-                scene.objects[o as usize].emission.as_dvec3() * std::f64::consts::PI * a
+            .zip(&element_area)
+            .map(|(e, &a)| {
+                scene.objects[e.object as usize].emission.as_dvec3() * std::f64::consts::PI * a
             })
             .collect();
+        let mut unshot = vec![DVec3::ZERO; mesh.patches.len()];
+        for (e, u) in mesh.elements.iter().zip(&element_unshot) {
+            unshot[e.patch as usize] += *u;
+        }
         let emitted = unshot.iter().fold(DVec3::ZERO, |s, u| s + *u).to_array();
         Solver {
             scene,
@@ -242,6 +266,9 @@ impl<'a> Solver<'a> {
             config,
             patch_area,
             element_area,
+            element_unshot,
+            shot_total: DVec3::ZERO,
+            received_total: DVec3::ZERO,
         }
     }
 
@@ -261,6 +288,7 @@ impl<'a> Solver<'a> {
                 Until::Unshot(f) => self.unshot_fraction() <= f,
                 Until::Shots(n) => self.stats.shots >= n,
                 Until::Seconds(s) => start.elapsed().as_secs_f64() >= s,
+                Until::Error(f) => self.estimated_error() <= f,
             };
             if done || self.stats.shots >= self.config.max_shots || !self.shoot_once() {
                 break;
@@ -283,13 +311,46 @@ impl<'a> Solver<'a> {
             return false;
         };
         let shot = self.unshot[src] * self.config.overshoot;
+        let density = self.source_density(src);
         self.unshot[src] -= shot;
+        let keep = 1.0 - self.config.overshoot;
+        for (e, u) in self.mesh.elements.iter().zip(&mut self.element_unshot) {
+            if e.patch as usize == src {
+                *u *= keep;
+            }
+        }
         let delta_b = (shot / self.patch_area[src]).as_vec3();
-        let factors = self.shoot_all(src);
-        let factors = self.refine(src, factors, shot);
+        let factors = self.shoot_all(src, density.as_ref());
+        let factors = self.refine(src, factors, shot, density.as_ref());
         self.book(src, shot, delta_b, &factors);
         self.stats.shots += 1;
         true
+    }
+
+    /// How the unshot radiosity of patch `src` varies over it (its elements' unshot power over
+    /// their areas, channels summed), or `None` when it is uniform.
+    fn source_density(&self, src: usize) -> Option<SourceDensity> {
+        let parts: Vec<(Tri, f32)> = self
+            .mesh
+            .elements
+            .iter()
+            .zip(&self.element_unshot)
+            .zip(&self.element_area)
+            .filter(|((e, _), _)| e.patch as usize == src)
+            .map(|((e, u), &a)| (self.mesh.tri(e), (u.element_sum() / a.max(1e-300)) as f32))
+            .collect();
+        if parts.len() < 2 {
+            return None;
+        }
+        let patch = self.mesh.patches[src];
+        SourceDensity::new(&patch, DENSITY_GRID, |x| {
+            // The element containing x (the nearest, for points on shared edges).
+            parts
+                .iter()
+                .map(|(t, d)| ((t.closest_point(x) - x).length_squared(), *d))
+                .fold((f32::MAX, 0.0), |b, c| if c.0 < b.0 { c } else { b })
+                .1
+        })
     }
 
     fn pick_shooter(&self) -> Option<usize> {
@@ -302,13 +363,18 @@ impl<'a> Solver<'a> {
         (power > 0.0).then_some(best)
     }
 
-    /// Form factors from every sample point to patch `src`.
-    fn shoot_all(&mut self, src: usize) -> Vec<f32> {
+    /// Form factors (weighted by `density`) from every sample point to patch `src`.
+    fn shoot_all(&mut self, src: usize, density: Option<&SourceDensity>) -> Vec<f32> {
         let points: Vec<SamplePoint> = self.mesh.vertices.iter().map(SamplePoint::from).collect();
-        self.shoot_points(src, &points)
+        self.shoot_points(src, density, &points)
     }
 
-    fn shoot_points(&mut self, src: usize, points: &[SamplePoint]) -> Vec<f32> {
+    fn shoot_points(
+        &mut self,
+        src: usize,
+        density: Option<&SourceDensity>,
+        points: &[SamplePoint],
+    ) -> Vec<f32> {
         let source = self.mesh.patches[src];
         let seed = self.config.seed ^ (self.stats.shots << 20) ^ src as u64;
         let config = self.config.form_factor;
@@ -318,9 +384,10 @@ impl<'a> Solver<'a> {
             .enumerate()
             .map(|(i, chunk)| {
                 let mut out = vec![0.0; chunk.len()];
-                let stats = shoot_batch(
+                let stats = shoot_batch_weighted(
                     octree,
                     &source,
+                    density,
                     chunk,
                     &config,
                     seed.wrapping_add(i as u64 * 7919),
@@ -341,7 +408,13 @@ impl<'a> Solver<'a> {
 
     /// Adaptive subdivision for this shot: split edges whose form factors differ strongly and
     /// are not linear along the edge. Returns the factors extended to the new sample points.
-    fn refine(&mut self, src: usize, mut factors: Vec<f32>, shot: DVec3) -> Vec<f32> {
+    fn refine(
+        &mut self,
+        src: usize,
+        mut factors: Vec<f32>,
+        shot: DVec3,
+        density: Option<&SourceDensity>,
+    ) -> Vec<f32> {
         let Some(adapt) = self.config.adapt else {
             return factors;
         };
@@ -362,7 +435,7 @@ impl<'a> Solver<'a> {
                 .iter()
                 .map(|&(a, b)| self.midpoint(a, b))
                 .collect();
-            let mid_f = self.shoot_points(src, &mids);
+            let mid_f = self.shoot_points(src, density, &mids);
             let mut split = 0;
             for (&(a, b), (m, fm)) in candidates.iter().zip(mids.iter().zip(mid_f)) {
                 let (fa, fb) = (factors[a as usize], factors[b as usize]);
@@ -441,14 +514,24 @@ impl<'a> Solver<'a> {
 
     /// Recomputes element areas after a split appended elements from index `before` and shrank
     /// the elements `shrunk`.
+    /// The appended halves follow the order of `shrunk` ([`Mesh::split_edge`]'s contract); each
+    /// half takes its share of the element's unshot power by area.
     fn fix_split_areas(&mut self, before: usize, shrunk: &[u32]) {
-        self.element_area.resize(self.mesh.elements.len(), 0.0);
-        let touched = shrunk
-            .iter()
-            .map(|&i| i as usize)
-            .chain(before..self.mesh.elements.len());
-        for i in touched {
-            self.element_area[i] = self.mesh.tri(&self.mesh.elements[i]).area() as f64;
+        let n = self.mesh.elements.len();
+        self.element_area.resize(n, 0.0);
+        self.element_unshot.resize(n, DVec3::ZERO);
+        for (k, &t) in shrunk.iter().enumerate() {
+            let (t, half) = (t as usize, before + k);
+            let old = self.element_area[t];
+            let area = |i: usize| self.mesh.tri(&self.mesh.elements[i]).area() as f64;
+            let (a, b) = (area(t), area(half));
+            let unshot = self.element_unshot[t];
+            let share = if a + b > 0.0 { b / (a + b) } else { 0.5 };
+            self.element_unshot[half] = unshot * share;
+            self.element_unshot[t] = unshot * (1.0 - share);
+            self.element_area[t] = a;
+            self.element_area[half] = b;
+            debug_assert!((a + b - old).abs() <= 1e-3 * old.max(1e-30));
         }
     }
 
@@ -460,14 +543,18 @@ impl<'a> Solver<'a> {
         let db = delta_b.as_dvec3();
         let mut received = DVec3::ZERO;
         let mut absorbed = DVec3::ZERO;
-        for (e, &area) in self.mesh.elements.iter().zip(&self.element_area) {
+        let elements = self.mesh.elements.iter().zip(&self.element_area);
+        for ((e, &area), u) in elements.zip(&mut self.element_unshot) {
             let f = e.v.iter().map(|&v| factors[v as usize] as f64).sum::<f64>() / 3.0;
             let power = db * (f * area);
             let rho = self.scene.objects[e.object as usize].reflectance.as_dvec3();
             received += power;
             absorbed += power * (DVec3::ONE - rho);
             self.unshot[e.patch as usize] += power * rho;
+            *u += power * rho;
         }
+        self.shot_total += shot;
+        self.received_total += received;
         let acc = &mut self.accounts;
         for c in 0..3 {
             acc.absorbed[c] += absorbed[c];
@@ -477,16 +564,67 @@ impl<'a> Solver<'a> {
         acc.unshot = unshot.to_array();
     }
 
-    /// Returns the ambient term (Cohen et al. 1988): `Σ unshot / Σ A` times `1 / (1 - ρ_avg)`.
+    /// Returns the ambient irradiance: where the unshot power would still go, spread evenly over
+    /// the surfaces. Cohen et al. (1988) take `Σ unshot / Σ A × 1 / (1 - ρ_avg)`, which holds in
+    /// a closed scene; here the share of shot power that surfaces have received so far (`c`,
+    /// below 1 when the scene is open) and the share of that they reflected (`r`) stand for the
+    /// closure and the reflectance: `c Σ unshot / Σ A × 1 / (1 - c r)`. Before the first shot
+    /// `c = 1` and `r = ρ_avg`, Cohen's form.
     pub fn ambient(&self) -> Vec3 {
         let total_area: f64 = self.element_area.iter().sum();
+        let unshot = self.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
+        let (c, r) = self.closure();
+        (unshot * c / total_area / (DVec3::ONE - c * r).max(DVec3::splat(1e-6))).as_vec3()
+    }
+
+    /// The received share `c` of shot power and the reflected share `r` of received power, per
+    /// channel (see [`Solver::ambient`]).
+    fn closure(&self) -> (DVec3, DVec3) {
         let mut rho = DVec3::ZERO;
+        let mut total_area = 0.0;
         for (e, &a) in self.mesh.elements.iter().zip(&self.element_area) {
             rho += self.scene.objects[e.object as usize].reflectance.as_dvec3() * a;
+            total_area += a;
         }
-        let rho_avg = rho / total_area;
-        let unshot = self.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
-        (unshot / total_area / (DVec3::ONE - rho_avg).max(DVec3::splat(1e-6))).as_vec3()
+        let rho_avg = rho / total_area.max(1e-300);
+        let absorbed = DVec3::from(self.accounts.absorbed);
+        let pick = |num: f64, den: f64, default: f64| if den > 0.0 { num / den } else { default };
+        let c = DVec3::from_array(std::array::from_fn(|i| {
+            pick(self.received_total[i], self.shot_total[i], 1.0)
+        }));
+        let r = DVec3::from_array(std::array::from_fn(|i| {
+            let received = self.received_total[i];
+            pick(received - absorbed[i], received, rho_avg[i])
+        }));
+        (
+            c.clamp(DVec3::ZERO, DVec3::ONE),
+            r.clamp(DVec3::ZERO, DVec3::ONE),
+        )
+    }
+
+    /// Estimates each object's relative error: the ambient term's share of its mean radiosity,
+    /// `ρ H_amb / (B + ρ H_amb)`, worst channel (objects with no area or reflectance: 0). It
+    /// assumes the power still unshot lands evenly; objects far from where it is (a room lit
+    /// only through a door, not yet reached) have `B` near 0 and so an estimate near 1, which
+    /// keeps the solve going until light reaches them.
+    pub fn estimated_errors(&self) -> Vec<f64> {
+        let ambient = self.ambient().as_dvec3();
+        self.object_means()
+            .into_iter()
+            .zip(&self.scene.objects)
+            .map(|((area, b), o)| {
+                let missing = o.reflectance.as_dvec3() * ambient;
+                (0..3)
+                    .filter(|&c| area > 0.0 && missing[c] > 0.0)
+                    .map(|c| missing[c] / (b[c] + missing[c]))
+                    .fold(0.0, f64::max)
+            })
+            .collect()
+    }
+
+    /// The worst of [`Solver::estimated_errors`].
+    pub fn estimated_error(&self) -> f64 {
+        self.estimated_errors().into_iter().fold(0.0, f64::max)
     }
 
     /// Returns the radiosity B = E + ρ (H + ambient) at each corner of element `e`.

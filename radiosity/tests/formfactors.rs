@@ -178,3 +178,47 @@ fn near_field_needs_the_analytic_form() {
         0.001,
     );
 }
+
+#[test]
+fn a_receiver_beside_a_grazing_source_sees_all_its_rays() {
+    // Issue 10, cause 1: ceiling points 0.01-1 mm from the corner with the (slanted) red wall of
+    // the Cornell box see the wall at grazing angles. Nothing lies between them and the wall, so
+    // every shadow ray must get through; rays that ended a fixed distance short of the wall along
+    // the ray stayed within f32 rounding of its plane and hit it (441-736 of 1,024 through).
+    use occ_radiosity::formfactor::form_factor_with;
+    use occ_radiosity::octree::{Octree, OctreeConfig, Traversal};
+    let scene = occ_radiosity::scene::cornell::load(true).expect("cornell");
+    let tris: Vec<Tri> = scene.triangles.iter().map(|t| t.tri).collect();
+    let octree = Octree::build(&tris, OctreeConfig::default());
+    let red = scene
+        .objects
+        .iter()
+        .position(|o| o.name == "red_wall")
+        .expect("red wall") as u32;
+    let config = FormFactorConfig {
+        rays: 1024,
+        offset: 1e-6 * scene.diagonal(),
+        ..FormFactorConfig::default()
+    };
+    let mut rng = Pcg32::new(3, 5);
+    let mut samples = Vec::new();
+    for gap in [0.01f32, 0.1, 1.0] {
+        // The red wall's top edge runs along x = 556 on the ceiling (y = 548.8).
+        let p = Vec3::new(556.0 - gap, 548.8, 300.0);
+        for src in scene.triangles.iter().filter(|t| t.object == red) {
+            source_samples(&src.tri, config.rays, &mut rng, &mut samples);
+            let (mut cast, mut through) = (0, 0);
+            form_factor_with(p, -Vec3::Y, &src.tri, &samples, &config, |_, o, d, tmax| {
+                let blocked = octree.occluded(o, d, 0.0, tmax, Traversal::Ropes);
+                cast += 1;
+                through += !blocked as u32;
+                blocked
+            });
+            assert!(cast > 0, "gap {gap}: no rays cast");
+            assert_eq!(
+                through, cast,
+                "gap {gap} mm: {through} of {cast} rays got through"
+            );
+        }
+    }
+}

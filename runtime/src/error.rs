@@ -44,13 +44,17 @@ pub enum ErrorKind {
     Host = 11,
     /// Occurs on every other node of a network when one node halts: the network stops.
     Stopped = 12,
+    /// Occurs when a REAL division has a zero divisor (occam's REAL arithmetic is checked).
+    Floating = 13,
+    /// Occurs when a replicator's count is negative.
+    ReplicatorCount = 14,
 }
 
 impl ErrorKind {
     /// The kind with code `code`.
     pub fn from_code(code: Word) -> Option<ErrorKind> {
         use ErrorKind::*;
-        const ALL: [ErrorKind; 13] = [
+        const ALL: [ErrorKind; 15] = [
             Stop,
             IfNoBranch,
             CaseNoMatch,
@@ -64,6 +68,8 @@ impl ErrorKind {
             MessageLength,
             Host,
             Stopped,
+            Floating,
+            ReplicatorCount,
         ];
         usize::try_from(code).ok().and_then(|i| ALL.get(i).copied())
     }
@@ -86,6 +92,8 @@ impl ErrorKind {
             ErrorKind::MessageLength => "message length mismatch",
             ErrorKind::Host => "host I/O failed",
             ErrorKind::Stopped => "stopped because another node of the network failed",
+            ErrorKind::Floating => "floating-point error: REAL division by zero",
+            ErrorKind::ReplicatorCount => "negative replicator count",
         }
     }
 }

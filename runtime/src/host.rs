@@ -6,8 +6,12 @@
 //! screen, then reads from the host's input (blocking the node's thread, like KRoC's blocking
 //! keyboard process). At end of input the keyboard delivers byte 255 ([`END_OF_INPUT`]), and
 //! again on every later read. Output is flushed when the node stops, in every case.
+//!
+//! When the screen is a terminal ([`HostIo::stdio`] asks), it is also flushed at each newline, as
+//! KRoC's screen is, so a program that prints a line now and then is seen as it runs; output to a
+//! file or pipe stays fully buffered, which keeps bulk output fast.
 
-use std::io::{BufWriter, Read, Write};
+use std::io::{BufWriter, IsTerminal, Read, Write};
 
 /// Which host stream an output endpoint writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,6 +34,8 @@ pub struct HostIo {
     input: Box<dyn Read + Send>,
     screen: BufWriter<Box<dyn Write + Send>>,
     error: BufWriter<Box<dyn Write + Send>>,
+    /// Flush the screen at each newline (a terminal).
+    line_flush: bool,
 }
 
 impl std::fmt::Debug for HostIo {
@@ -49,7 +55,14 @@ impl HostIo {
             input,
             screen: BufWriter::with_capacity(1 << 16, screen),
             error: BufWriter::new(error),
+            line_flush: false,
         }
+    }
+
+    /// Flushes the screen at each newline (`true`) or only at [`FLUSH`], input and the end.
+    pub fn flush_lines(mut self, on: bool) -> HostIo {
+        self.line_flush = on;
+        self
     }
 
     /// Binds to the process's stdin, stdout and stderr.
@@ -59,6 +72,7 @@ impl HostIo {
             Box::new(std::io::stdout()),
             Box::new(std::io::stderr()),
         )
+        .flush_lines(std::io::stdout().is_terminal())
     }
 
     /// Writes `bytes` to `stream`; a [`FLUSH`] byte is not written but flushes the stream (as
@@ -70,8 +84,16 @@ impl HostIo {
             HostStream::Error => &mut self.error,
         };
         let mut parts = bytes.split(|&b| b == FLUSH).peekable();
+        let by_line = self.line_flush && stream == HostStream::Screen;
         while let Some(part) = parts.next() {
-            w.write_all(part)?;
+            match part.iter().rposition(|&b| b == b'\n') {
+                Some(end) if by_line => {
+                    w.write_all(&part[..=end])?;
+                    w.flush()?;
+                    w.write_all(&part[end + 1..])?;
+                }
+                _ => w.write_all(part)?,
+            }
             if parts.peek().is_some() {
                 w.flush()?;
             }
@@ -105,5 +127,54 @@ impl HostIo {
         self.screen.flush()?;
         self.error.flush()?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+    use std::sync::{Arc, Mutex};
+
+    /// A writer whose bytes the test can see while `HostIo` still holds it.
+    #[derive(Clone, Default)]
+    struct Shared(Arc<Mutex<Vec<u8>>>);
+
+    impl Write for Shared {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().unwrap().extend_from_slice(buf);
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    fn host(screen: &Shared, by_line: bool) -> HostIo {
+        HostIo::new(
+            Box::new(std::io::empty()),
+            Box::new(screen.clone()),
+            Box::new(std::io::sink()),
+        )
+        .flush_lines(by_line)
+    }
+
+    #[test]
+    fn a_terminal_screen_shows_each_finished_line() {
+        let screen = Shared::default();
+        let mut io = host(&screen, true);
+        io.write(HostStream::Screen, b"one\ntw").unwrap();
+        assert_eq!(*screen.0.lock().unwrap(), b"one\n");
+        io.write(HostStream::Screen, b"o\n").unwrap();
+        assert_eq!(*screen.0.lock().unwrap(), b"one\ntwo\n");
+    }
+
+    #[test]
+    fn other_screens_wait_for_flush() {
+        let screen = Shared::default();
+        let mut io = host(&screen, false);
+        io.write(HostStream::Screen, b"one\n").unwrap();
+        assert!(screen.0.lock().unwrap().is_empty());
+        io.write(HostStream::Screen, &[b'x', FLUSH]).unwrap();
+        assert_eq!(*screen.0.lock().unwrap(), b"one\nx");
     }
 }

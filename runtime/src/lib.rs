@@ -89,11 +89,11 @@ pub mod host;
 pub mod intrinsic;
 pub mod link;
 mod mailbox;
+#[cfg(feature = "mpi")]
+pub mod mpi;
 pub mod node;
 pub mod par;
 pub mod placement;
-#[cfg(feature = "mpi")]
-pub mod mpi;
 mod pool;
 pub mod program;
 pub mod remote;
@@ -107,8 +107,8 @@ pub use deadlock::{BlockedProcess, DeadlockReport, WaitsOn};
 pub use error::{ErrorKind, Halt, RunError};
 pub use host::HostIo;
 pub use link::{LinkStats, Network};
-pub use pool::PoolView;
 pub use node::{Node, NodeConfig};
+pub use pool::PoolView;
 pub use program::{ChannelName, ProcInfo, ProgramInfo, SourceLoc};
 pub use sched::Idle;
 pub use stats::Stats;

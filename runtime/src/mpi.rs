@@ -59,7 +59,12 @@ pub struct Mpi {
 
 impl std::fmt::Debug for Mpi {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Mpi(rank {} of {})", self.world.rank(), self.world.size())
+        write!(
+            f,
+            "Mpi(rank {} of {})",
+            self.world.rank(),
+            self.world.size()
+        )
     }
 }
 
@@ -75,6 +80,30 @@ impl Mpi {
         })
     }
 
+    /// Plain MPI, for benchmarks to compare links against: `n` round trips of a `bytes`-byte
+    /// message between rank 0 and rank `peer` (blocking send and receive; every other rank waits
+    /// at a barrier). Returns the time the round trips took on rank 0 (zero elsewhere).
+    pub fn raw_round_trips(&self, peer: usize, bytes: usize, n: u64) -> Duration {
+        let (me, peer) = (self.world.rank(), peer as i32);
+        let mut buf = vec![0u8; bytes];
+        self.world.barrier();
+        let start = std::time::Instant::now();
+        if me == 0 || me == peer {
+            let other = self.world.process_at_rank(if me == 0 { peer } else { 0 });
+            for _ in 0..n {
+                if me == 0 {
+                    other.send(&buf[..]);
+                    other.receive_into(&mut buf[..]);
+                } else {
+                    other.receive_into(&mut buf[..]);
+                    other.send(&buf[..]);
+                }
+            }
+        }
+        let took = start.elapsed();
+        self.world.barrier();
+        if me == 0 { took } else { Duration::ZERO }
+    }
 }
 
 impl Transport for Mpi {
@@ -249,8 +278,7 @@ impl Driver<'_> {
             tag::REPLY if buf.len() == 25 => {
                 let wave = word(buf, 0);
                 if wave == self.wave && self.waiting {
-                    self.replies[from as usize] =
-                        Some((buf[8] != 0, word(buf, 9), word(buf, 17)));
+                    self.replies[from as usize] = Some((buf[8] != 0, word(buf, 9), word(buf, 17)));
                 }
             }
             tag::DONE => self.done = true,
@@ -266,8 +294,7 @@ impl Driver<'_> {
     /// Rank 0: starts a wave when quiescent, and ends the run after two agreeing ones.
     fn coordinate(&mut self, relay: &Relay, pool: &PoolView<'_>, out_empty: bool) {
         if !self.waiting {
-            if std::time::Instant::now() < self.next_wave
-                || !self.quiescent(relay, pool, out_empty)
+            if std::time::Instant::now() < self.next_wave || !self.quiescent(relay, pool, out_empty)
             {
                 return;
             }

@@ -152,7 +152,11 @@ impl Relay {
     /// the relay.
     pub fn new(net: &Network) -> Relay {
         let halves = std::mem::take(&mut *crate::link::lock(&net.state.remote));
-        let by_link = halves.iter().enumerate().map(|(i, h)| (h.link, i)).collect();
+        let by_link = halves
+            .iter()
+            .enumerate()
+            .map(|(i, h)| (h.link, i))
+            .collect();
         let relay = Relay {
             halves,
             by_link,
@@ -259,7 +263,9 @@ impl Relay {
         if let Some(r) = st.reader.take_if(|r| r.len as usize == bytes.len()) {
             // SAFETY: the reader is blocked with a buffer of `r.len` bytes, kept valid by the
             // lock (its node cannot withdraw meanwhile).
-            unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), r.data as *mut u8, bytes.len()) };
+            unsafe {
+                std::ptr::copy_nonoverlapping(bytes.as_ptr(), r.data as *mut u8, bytes.len())
+            };
             st.stats.reader_blocked += r.since.elapsed();
             st.stats.messages += 1;
             st.stats.bytes += bytes.len() as u64;
@@ -282,5 +288,4 @@ impl Relay {
         drop(st);
         half.offered = Some(bytes);
     }
-
 }

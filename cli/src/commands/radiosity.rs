@@ -10,7 +10,8 @@ use std::time::Instant;
 use anyhow::Context;
 use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::mesh::{Mesh, MeshConfig};
-use occ_radiosity::output::{image, plot, ply, probe, report};
+use occ_radiosity::output::{image, plot, ply, probe, report, truth};
+use occ_radiosity::pathtrace::{PathTraceConfig, PathTracer};
 use occ_radiosity::scene::{self, Scene};
 use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
 
@@ -74,43 +75,87 @@ pub struct Args {
     /// Exposure applied to radiance before the sRGB curve.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
+    /// View for image.png: "pos X Y Z look X Y Z up X Y Z fov DEG" (look: a point looked at;
+    /// `dir X Y Z` may replace it). Default: the scene's `# camera:` comment, else a view chosen
+    /// to see into the scene.
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// Most elements to mesh the scene into (about 250 bytes each with their sample points).
+    /// Over it, default sizes are coarsened until the estimate fits; sizes given with
+    /// --patch-size / --element-size are refused.
+    #[arg(long, default_value_t = 4_000_000)]
+    pub max_elements: usize,
+    /// Run only the path tracer (the ground truth): each object's mean B and the probes' B with
+    /// standard errors, into `pathtrace.json`.
+    #[arg(long, conflicts_with = "reference_mc")]
+    pub pathtrace: bool,
+    /// Run the path tracer beside the solver: report.json gets each object's error against it,
+    /// convergence.csv/png the RMS error against it over time.
+    #[arg(long, conflicts_with = "reference")]
+    pub reference_mc: bool,
+    /// Path tracer: paths per object and per probe (the standard error falls as 1/sqrt).
+    #[arg(long, default_value_t = 65_536)]
+    pub pt_samples: u64,
 }
-
-/// Most elements `occ radiosity` will mesh a scene into (a few hundred bytes each, with their
-/// sample points and octree references): beyond it the sizes are refused rather than exhausting
-/// memory.
-const MAX_ELEMENTS: f64 = 2e7;
 
 /// Runs `occ radiosity`.
 pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     check_args(&args)?;
+    let progress = Progress::new();
     let t0 = Instant::now();
-    let (name, scene) = load_scene(args.scene.as_deref())?;
+    progress.stage("loading", "");
+    let (name, mut scene) = load_scene(args.scene.as_deref())?;
+    if let Some(text) = &args.camera {
+        scene.camera = Some(scene::parse_camera(text).with_context(|| {
+            format!("--camera `{text}`: expected \"pos X Y Z look X Y Z up X Y Z fov DEG\"")
+        })?);
+    }
     let load = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
-    let diag = scene.diagonal();
-    let mesh_config = MeshConfig {
-        patch_size: args.patch_size.unwrap_or(diag / 4.0),
-        element_size: args.element_size.unwrap_or(diag / 20.0),
+    let probes = match &args.probe {
+        Some(path) => Some(probe::parse_probes(
+            &path.display().to_string(),
+            &read(path)?,
+        )?),
+        None => None,
     };
-    let elements = mesh_config.estimated_elements(&scene);
-    anyhow::ensure!(
-        elements <= MAX_ELEMENTS,
-        "{name}: meshing with patch size {} and element size {} would make about {elements:.2e} \
-         elements (more than {MAX_ELEMENTS:.0e}); give a larger --patch-size / --element-size",
-        mesh_config.patch_size,
-        mesh_config.element_size
+    let truth = if args.pathtrace || args.reference_mc {
+        let probes = probes.as_deref().unwrap_or_default();
+        Some(path_trace(&args, &name, &scene, probes)?)
+    } else {
+        None
+    };
+    if args.pathtrace {
+        return Ok(ExitCode::SUCCESS);
+    }
+    let t1 = Instant::now();
+    let mesh_config = mesh_config(&args, &name, &scene)?;
+    progress.stage(
+        "meshing",
+        &format!(
+            "{} triangles, patches {:.4}, elements {:.4}",
+            scene.triangles.len(),
+            mesh_config.patch_size,
+            mesh_config.element_size
+        ),
     );
     let mesh = Mesh::from_scene(&scene, mesh_config);
-    if mesh.stats.collapsed > 0 {
-        eprintln!(
-            "warning: {name}: {} triangles are smaller than the weld distance ({:.3e}, 1e-5 of \
-             the scene's diagonal) and were left out",
-            mesh.stats.collapsed,
-            1e-5 * diag
-        );
-    }
+    anyhow::ensure!(
+        mesh.stats.elements <= args.max_elements,
+        "{name}: meshing made {} elements, more than --max-elements {} (discontinuity cuts add \
+         to the estimate); give larger --patch-size / --element-size or a larger --max-elements",
+        mesh.stats.elements,
+        args.max_elements
+    );
+    let diag = scene.diagonal();
+    print_left_out(&name, &scene, &mesh, diag);
     let mesh_time = t1.elapsed().as_secs_f64();
+    progress.stage(
+        "octree",
+        &format!(
+            "{} patches, {} elements, {} sample points",
+            mesh.stats.patches, mesh.stats.elements, mesh.stats.vertices
+        ),
+    );
     let t2 = Instant::now();
     let mut solver = Solver::new(
         &scene,
@@ -121,32 +166,195 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(path) = &args.reference {
         let text = read(path)?;
         let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
-        solver.reference = Some(report::reference_means(
-            &path.display().to_string(),
+        let file = path.display().to_string();
+        for warning in report::reference_mismatch(
+            &file,
             &text,
-            &names,
-        )?);
+            &solver
+                .object_means()
+                .iter()
+                .zip(&names)
+                .map(|((area, _), n)| (n.clone(), *area))
+                .collect::<Vec<_>>(),
+        ) {
+            eprintln!("warning: {warning}");
+        }
+        solver.reference = Some(report::reference_means(&file, &text, &names)?);
     }
-    let probes = match &args.probe {
-        Some(path) => Some(probe::parse_probes(
-            &path.display().to_string(),
-            &read(path)?,
-        )?),
-        None => None,
-    };
+    if let Some(truth) = &truth {
+        let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
+        solver.reference = Some(
+            names
+                .iter()
+                .map(|n| truth.object(n).map(|o| o.mean_b.into()))
+                .collect(),
+        );
+    }
     let t3 = Instant::now();
-    solve(&mut solver);
+    progress.stage("shooting", &format!("until {:?}", args.until));
+    solve(&mut solver, &progress);
     let timings = report::Timings {
         load,
         mesh: mesh_time,
         octree: octree_time,
         solve: t3.elapsed().as_secs_f64(),
     };
-    write_outputs(&args, &solver, &name, timings, probes.as_deref())?;
+    write_outputs(
+        &args,
+        &solver,
+        &name,
+        timings,
+        probes.as_deref(),
+        truth.as_ref(),
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 
+/// The meshing sizes: given, or defaults (patches diagonal / 4, elements diagonal / 20)
+/// coarsened until the element estimate fits --max-elements. Given sizes over it are refused.
+fn mesh_config(args: &Args, name: &str, scene: &Scene) -> anyhow::Result<MeshConfig> {
+    let diag = scene.diagonal();
+    let config = MeshConfig {
+        patch_size: args.patch_size.unwrap_or(diag / 4.0),
+        element_size: args.element_size.unwrap_or(diag / 20.0),
+    };
+    let budget = args.max_elements as f64;
+    let estimate = config.estimated_elements(scene);
+    if estimate <= budget {
+        return Ok(config);
+    }
+    anyhow::ensure!(
+        args.patch_size.is_none() && args.element_size.is_none(),
+        "{name}: meshing with patch size {} and element size {} would make about {estimate:.3e} \
+         elements, more than --max-elements {}; give a larger --patch-size / --element-size \
+         (or a larger --max-elements if memory allows, about 250 bytes an element)",
+        config.patch_size,
+        config.element_size,
+        args.max_elements
+    );
+    let coarse = config.coarsened(scene, budget);
+    eprintln!(
+        "note: {name}: the default sizes would make about {estimate:.3e} elements, more than \
+         --max-elements {}; meshing with patch size {:.4} and element size {:.4} instead",
+        args.max_elements, coarse.patch_size, coarse.element_size
+    );
+    Ok(coarse)
+}
+
+/// Prints what the loader left out and the irregular input meshing found (also in report.json).
+fn print_left_out(name: &str, scene: &Scene, mesh: &Mesh, diag: f32) {
+    for note in &scene.left_out {
+        eprintln!("note: {note}");
+    }
+    if scene.dropped_degenerate > 0 {
+        eprintln!(
+            "note: {name}: {} zero-area triangles dropped",
+            scene.dropped_degenerate
+        );
+    }
+    let c = mesh.stats.input;
+    let counts = [
+        (c.collapsed, "smaller than the weld distance, left out"),
+        (c.duplicates, "duplicates, left out"),
+        (
+            c.two_sided,
+            "two-sided pairs, meshed as two one-sided surfaces",
+        ),
+        (
+            c.slivers,
+            "slivers narrower than the weld distance, not cut",
+        ),
+        (c.non_manifold_edges, "non-manifold edges"),
+        (
+            c.flipped_edges,
+            "edges between triangles of one object facing opposite ways",
+        ),
+    ];
+    for (n, what) in counts.into_iter().filter(|c| c.0 > 0) {
+        eprintln!(
+            "note: {name}: {n} {what} (weld distance {:.3e}, 1e-5 of the diagonal)",
+            1e-5 * diag
+        );
+    }
+}
+
+/// Progress on stderr: a line per stage, and during shooting a line that rewrites itself on a
+/// terminal or a new line every few seconds otherwise.
+struct Progress {
+    terminal: bool,
+    start: Instant,
+}
+
+impl Progress {
+    fn new() -> Progress {
+        Progress {
+            terminal: std::io::stderr().is_terminal(),
+            start: Instant::now(),
+        }
+    }
+
+    fn stage(&self, stage: &str, detail: &str) {
+        eprintln!(
+            "[{:>7.1} s] {stage}{}{detail}",
+            self.start.elapsed().as_secs_f64(),
+            if detail.is_empty() { "" } else { ": " }
+        );
+    }
+}
+
+/// Runs the path tracer on the scene and probes, writes `pathtrace.json` into `--out` and prints
+/// the per-object means; returns the reference.
+fn path_trace(
+    args: &Args,
+    name: &str,
+    scene: &Scene,
+    probes: &[probe::Probe],
+) -> anyhow::Result<truth::Reference> {
+    let config = PathTraceConfig {
+        samples: args.pt_samples,
+        seed: args.seed,
+        ..PathTraceConfig::default()
+    };
+    let start = Instant::now();
+    let tracer = PathTracer::new(scene);
+    let means = tracer.object_means(&config);
+    let at_probes = tracer.probes(probes, &config);
+    let seconds = start.elapsed().as_secs_f64();
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let pairs: Vec<_> = probes.iter().copied().zip(at_probes).collect();
+    let reference =
+        truth::Reference::new((name, scene), &command, &config, seconds, &means, &pairs);
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let path = args.out.join("pathtrace.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&reference)?)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    for o in &reference.objects {
+        let rel = |c: usize| 100.0 * o.std_err[c] / o.mean_b[c].max(f64::MIN_POSITIVE);
+        println!(
+            "{:<24} B = {:9.5} {:9.5} {:9.5}   std err {:.2}% {:.2}% {:.2}%",
+            o.name,
+            o.mean_b[0],
+            o.mean_b[1],
+            o.mean_b[2],
+            rel(0),
+            rel(1),
+            rel(2)
+        );
+    }
+    println!(
+        "{name}: path traced, {} paths per object, {seconds:.2} s; written to {}",
+        config.samples,
+        path.display()
+    );
+    Ok(reference)
+}
+
 fn check_args(args: &Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        args.pt_samples >= 2,
+        "--pt-samples must be at least 2 (a standard error needs two samples)"
+    );
     anyhow::ensure!(
         args.rays >= 1 && args.rays <= 65_536,
         "--rays must be between 1 and 65536"
@@ -205,28 +413,39 @@ fn load_scene(path: Option<&Path>) -> anyhow::Result<(String, Scene)> {
             scene::cornell::load(true)?,
         ));
     };
-    let text = read(path)?;
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let library = |name: &str| std::fs::read_to_string(dir.join(name)).map_err(|e| e.to_string());
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let (text, latin1) = scene::decode(&bytes);
     let name = path.display().to_string();
-    let scene = scene::load_obj(&name, &text, &library)?;
+    let mut scene = scene::load_obj_with(&name, &text, &scene::SearchFiles::beside(path))?;
+    if latin1 {
+        scene
+            .left_out
+            .push(format!("{name}: not UTF-8; read as Latin-1"));
+    }
     Ok((name, scene))
 }
 
-/// Runs the solver, with a one-line progress display on a terminal.
-fn solve(solver: &mut Solver) {
-    let terminal = std::io::stderr().is_terminal();
+/// Runs the solver, showing progress: a line that rewrites itself ten times a second on a
+/// terminal, otherwise a line every five seconds.
+fn solve(solver: &mut Solver, progress: &Progress) {
+    let terminal = progress.terminal;
     let start = Instant::now();
     let mut last = 0.0;
+    let every = if terminal { 0.1 } else { 5.0 };
     solver.run(|shots, unshot| {
         let now = start.elapsed().as_secs_f64();
-        if terminal && now - last > 0.1 {
+        if now - last > every {
             last = now;
-            eprint!(
-                "\r  shot {shots:>6}  unshot {:>8.5}%  {now:>6.1} s ",
+            let line = format!(
+                "  shot {shots:>6}  unshot {:>8.5}%  {now:>6.1} s",
                 unshot * 100.0
             );
-            let _ = std::io::stderr().flush();
+            if terminal {
+                eprint!("\r{line} ");
+                let _ = std::io::stderr().flush();
+            } else {
+                eprintln!("{line}");
+            }
         }
     });
     if terminal {
@@ -240,6 +459,7 @@ fn write_outputs(
     name: &str,
     timings: report::Timings,
     probes: Option<&[probe::Probe]>,
+    truth: Option<&truth::Reference>,
 ) -> anyhow::Result<()> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -247,7 +467,19 @@ fn write_outputs(
         std::fs::write(out.join(file), bytes)
             .with_context(|| format!("cannot write {}", out.join(file).display()))
     };
-    let rep = report::build(solver, name, timings);
+    let mut rep = report::build(solver, name, timings);
+    if let Some(truth) = truth {
+        let names: Vec<String> = solver
+            .scene
+            .objects
+            .iter()
+            .map(|o| o.name.clone())
+            .collect();
+        let means: Vec<_> = solver.object_means().into_iter().map(|(_, b)| b).collect();
+        let errors = truth::object_errors(&names, &means, truth);
+        print!("{}", truth::error_table(&errors));
+        rep.truth = Some(errors);
+    }
     write(
         "report.json",
         serde_json::to_string_pretty(&rep)?.as_bytes(),

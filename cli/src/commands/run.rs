@@ -82,8 +82,8 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     let compiled = match occ_codegen::compile_with(program, &front.checked, map, &set) {
         Ok(compiled) => compiled,
         Err(error) => {
-            if reports {
-                eprintln!("{}: {error}", args.file.display());
+            for d in error.diagnostics().iter().filter(|_| reports) {
+                eprintln!("{:?}", d.to_report(map));
             }
             return Ok(ExitCode::from(1));
         }
@@ -118,8 +118,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
             Ok(o) => o,
             Err(why) => anyhow::bail!("{why}"),
         }
-    } else if let Some(o) =
-        compiled.run_network_over(&opts, HostIo::stdio(), transport.transport())
+    } else if let Some(o) = compiled.run_network_over(&opts, HostIo::stdio(), transport.transport())
     {
         o
     } else if compiled.is_node_program() {

@@ -1,11 +1,8 @@
-//! The one place where running a compiled test program hooks in.
-//!
-//! `run`, `runtime-error` and `deadlock` tests need the code generator and the runtime. Until they
-//! exist, [`run_program`] answers [`Unavailable`] and the harness counts those tests as skipped after
-//! checking them with the front end. When `occ run` works, make `run_program` start the `occ` binary
-//! itself (`std::env::current_exe()`, so that a crash or hang of the program under test cannot take
-//! the harness down) with `run FILE -I DIR...`, feed `stdin`, enforce a time limit, and fill in an
-//! [`Execution`]; [`crate::testsuite::judge`] already knows how to compare it.
+//! The one place where running a compiled test program hooks in: `run`, `runtime-error` and
+//! `deadlock` tests start `occ run FILE -I DIR...` as a child process (so that a crash or hang of
+//! the program under test cannot take the harness down), feed it `stdin`, enforce a time limit,
+//! and hand the [`Execution`] to [`crate::testsuite::judge`]. A run that cannot be started is
+//! an error of the test, never a skip.
 
 use std::path::Path;
 
@@ -20,29 +17,23 @@ pub struct Execution {
     pub status: Option<i32>,
 }
 
-/// Running programs is not possible yet.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Unavailable;
-
-/// The reason shown for tests that could not be run.
-pub const SKIP_REASON: &str = "no code generator yet";
-
 /// How long one test program may run before it is killed.
 const TIME_LIMIT: std::time::Duration = std::time::Duration::from_secs(20);
 
-/// Runs the program in `path` with `stdin` as its keyboard input, in a child `occ run` process
-/// (so that a crash or hang of the program under test cannot take the harness down), killed after
-/// [`TIME_LIMIT`].
+/// Runs the program in `path` with `stdin` as its keyboard input, in a child `runner run`
+/// process killed after [`TIME_LIMIT`].
+///
+/// Fails, saying why, when the child cannot be started.
 pub fn run_program(
+    runner: &Path,
     path: &Path,
     include_dirs: &[std::path::PathBuf],
     args: &[String],
     stdin: &str,
-) -> Result<Execution, Unavailable> {
+) -> Result<Execution, String> {
     use std::io::{Read, Write};
     use std::process::{Command, Stdio};
-    let exe = std::env::current_exe().map_err(|_| Unavailable)?;
-    let mut cmd = Command::new(exe);
+    let mut cmd = Command::new(runner);
     cmd.arg("run").arg(path);
     for d in include_dirs {
         cmd.arg("-I").arg(d);
@@ -53,7 +44,7 @@ pub fn run_program(
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|_| Unavailable)?;
+        .map_err(|e| format!("cannot start `{} run`: {e}", runner.display()))?;
     let input = stdin.as_bytes().to_vec();
     let mut child_in = child.stdin.take();
     let feeder = std::thread::spawn(move || {

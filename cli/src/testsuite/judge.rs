@@ -11,10 +11,9 @@ use crate::testsuite::expect::{Expectation, Kind, LineMark};
 pub enum Verdict {
     /// Everything expected happened.
     Pass,
-    /// Something else happened; the text says what was expected and what was found.
+    /// Something else happened (or the program could not be run); the text says what was
+    /// expected and what was found.
     Fail(String),
-    /// The front-end part passed, but the rest could not be done (the reason says why).
-    Skip(&'static str),
 }
 
 /// Judges the front end's diagnostics for `file` against its expectation.

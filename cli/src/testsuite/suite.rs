@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use crate::frontend::{self, Checked, Options};
 use crate::testsuite::bless;
-use crate::testsuite::execute::{self, SKIP_REASON};
+use crate::testsuite::execute;
 use crate::testsuite::expect::{self, Expectation, Kind};
 use crate::testsuite::judge::{self, Verdict};
 
@@ -24,6 +24,8 @@ pub struct Config {
     pub timeout: Duration,
     /// Rewrite `-- stdout:` lines from actual output (`OCC_BLESS=1`).
     pub bless: bool,
+    /// The `occ` binary that runs `run`, `runtime-error` and `deadlock` tests.
+    pub runner: PathBuf,
 }
 
 /// The outcome of one file.
@@ -42,10 +44,8 @@ pub struct FileResult {
 pub struct Summary {
     /// Files whose expectation held.
     pub passed: usize,
-    /// Files whose expectation did not hold (or could not be read).
+    /// Files whose expectation did not hold (or could not be read, or run).
     pub failed: usize,
-    /// Files that passed the front end but could not be run.
-    pub skipped: usize,
 }
 
 impl Summary {
@@ -56,19 +56,14 @@ impl Summary {
             match result.verdict {
                 Verdict::Pass => summary.passed += 1,
                 Verdict::Fail(_) => summary.failed += 1,
-                Verdict::Skip(_) => summary.skipped += 1,
             }
         }
         summary
     }
 
-    /// The closing line: `N passed, N failed`, plus `, N skipped` when some were skipped.
+    /// The closing line: `N passed, N failed`.
     pub fn line(&self) -> String {
-        let mut line = format!("{} passed, {} failed", self.passed, self.failed);
-        if self.skipped > 0 {
-            line.push_str(&format!(", {} skipped", self.skipped));
-        }
-        line
+        format!("{} passed, {} failed", self.passed, self.failed)
     }
 }
 
@@ -143,8 +138,14 @@ fn judge_file(path: &Path, source: &str, expectation: &Expectation, config: &Con
         return verdict;
     }
     let stdin = input_text(&expectation.stdin);
-    match execute::run_program(path, &include_dirs, &expectation.args, &stdin) {
-        Err(execute::Unavailable) => Verdict::Skip(SKIP_REASON),
+    match execute::run_program(
+        &config.runner,
+        path,
+        &include_dirs,
+        &expectation.args,
+        &stdin,
+    ) {
+        Err(why) => Verdict::Fail(why),
         Ok(run) => {
             if config.bless && expectation.kind == Kind::Run {
                 bless_file(path, source, &run.stdout);
@@ -225,15 +226,8 @@ mod tests {
         let s = Summary {
             passed: 3,
             failed: 1,
-            skipped: 0,
         };
         assert_eq!(s.line(), "3 passed, 1 failed");
-        let s = Summary {
-            passed: 3,
-            failed: 0,
-            skipped: 2,
-        };
-        assert_eq!(s.line(), "3 passed, 0 failed, 2 skipped");
     }
 
     #[test]

@@ -208,6 +208,11 @@ impl Tr<'_, '_> {
         let DeclKind::Function { params, body, .. } = &d.kind else {
             return Err(self.cx.internal(span, "not a FUNCTION"));
         };
+        let result_exprs = match body {
+            FunctionBody::Is(es) => &es[..],
+            FunctionBody::Valof(v) => &v.results[..],
+        };
+        let slots = self.result_slots(result_exprs)?;
         let mark = self.frame.mark();
         // Bind the formals to the actuals.
         let mut binds = Vec::new();
@@ -239,21 +244,59 @@ impl Tr<'_, '_> {
             }
         }
         let out = match body {
-            FunctionBody::Is(es) => {
-                let mut out = Vec::new();
-                for e in es {
-                    out.push(self.expr(e)?);
-                }
-                out
-            }
-            FunctionBody::Valof(v) => self.valof(v)?,
+            FunctionBody::Is(es) => self.results(es, &slots)?,
+            FunctionBody::Valof(v) => self.valof_into(v, &slots)?,
         };
         self.frame.release(mark);
         Ok(out)
     }
 
-    /// Lowers a VALOF and returns its results (scalars).
+    /// Frame temporaries for the array- and record-valued results among `results` (`None` for
+    /// scalars), allocated before the FUNCTION's or VALOF's own locals so that they outlive them.
+    fn result_slots(&mut self, results: &[Expr]) -> Res<Vec<Option<Value>>> {
+        let mut slots = Vec::with_capacity(results.len());
+        for e in results {
+            let ty = self.cx.type_of(e)?;
+            if is_scalar(&self.cx.checked.types, &ty) {
+                slots.push(None);
+                continue;
+            }
+            let size = crate::layout::size_of(&self.cx.checked.types, &ty).ok_or_else(|| {
+                self.cx
+                    .unsupported(e.span, "an array-valued result whose size is not constant")
+            })?;
+            let off = self.frame.alloc(size);
+            slots.push(Some(self.local_addr(off)));
+        }
+        Ok(slots)
+    }
+
+    /// Evaluates result expressions: scalars as values, arrays and records copied into their
+    /// slot, whose address stands for them.
+    fn results(&mut self, es: &[Expr], slots: &[Option<Value>]) -> Res<Vec<Value>> {
+        let mut out = Vec::with_capacity(es.len());
+        for (e, slot) in es.iter().zip(slots) {
+            match slot {
+                None => out.push(self.expr(e)?),
+                Some(dst) => {
+                    let src = self.value_loc(e)?;
+                    let size = self.loc_size(&src, e.span)?;
+                    self.copy_bytes(*dst, src.addr, size);
+                    out.push(*dst);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Lowers a VALOF and returns its results: scalars as values, arrays and records as the
+    /// address of a copy that outlives the VALOF's locals.
     pub fn valof(&mut self, v: &Valof) -> Res<Vec<Value>> {
+        let slots = self.result_slots(&v.results)?;
+        self.valof_into(v, &slots)
+    }
+
+    fn valof_into(&mut self, v: &Valof, slots: &[Option<Value>]) -> Res<Vec<Value>> {
         self.in_expr += 1;
         let mark = self.frame.mark();
         let r = (|| {
@@ -261,11 +304,7 @@ impl Tr<'_, '_> {
                 self.decl(d)?;
             }
             self.process(&v.body)?;
-            let mut out = Vec::new();
-            for e in &v.results {
-                out.push(self.expr(e)?);
-            }
-            Ok(out)
+            self.results(&v.results, slots)
         })();
         self.frame.release(mark);
         self.in_expr -= 1;

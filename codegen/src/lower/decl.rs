@@ -4,7 +4,7 @@
 use cranelift_codegen::ir::{InstBuilder, types};
 use occ_compiler::checked::SymbolKind;
 use occ_compiler::types::Type;
-use occ_grammar::ast::{AbbrevMode, Decl, DeclKind, Name};
+use occ_grammar::ast::{AbbrevMode, Decl, DeclKind, Expr, ExprKind, Name};
 
 use super::{Loc, Res, Storage, Tr, mem};
 use crate::layout::{is_scalar, rank, size_of};
@@ -38,10 +38,15 @@ impl Tr<'_, '_> {
                         self.assign_to(a, &ty, &[], value)?;
                         self.bind(sym, off, false);
                     }
-                    _ => {
-                        let l = self.place(value)?;
-                        self.bind_ref(sym, &l);
-                    }
+                    _ => match &value.kind {
+                        ExprKind::Table(items) if self.is_chan_table(&ty) => {
+                            self.chan_table(sym, items)?;
+                        }
+                        _ => {
+                            let l = self.place(value)?;
+                            self.bind_ref(sym, &l);
+                        }
+                    },
                 }
                 Ok(())
             }
@@ -72,7 +77,18 @@ impl Tr<'_, '_> {
                     .insert(sym, Storage::Function(std::rc::Rc::new(d.clone())));
                 Ok(())
             }
-            DeclKind::Place { .. } => Err(self.cx.unsupported(d.span, "PLACE")),
+            // A channel placed at a link address (`PLACE c AT 4:`), as Inmos configurations
+            // write it: the network's links come from which processors use the channel, so
+            // the address adds nothing. Placing data at a memory address is not supported.
+            DeclKind::Place { name, .. } => {
+                let sym = self.cx.symbol(name)?;
+                let ty = &self.cx.checked.symbols[sym].ty;
+                if matches!(crate::layout::base_elem(ty), Type::Chan(..)) {
+                    Ok(())
+                } else {
+                    Err(self.cx.unsupported(d.span, "PLACE of data at an address"))
+                }
+            }
             DeclKind::Asm(_) => Err(self.cx.unsupported(d.span, "ASM / GUY blocks")),
             DeclKind::PlaceIn { .. } => Ok(()),
             #[allow(unreachable_patterns)]
@@ -172,6 +188,29 @@ impl Tr<'_, '_> {
             }
         };
         self.cx.env.insert(sym, st);
+    }
+
+    /// Reports whether `ty` is a one-dimensional array of channels.
+    fn is_chan_table(&self, ty: &Type) -> bool {
+        let ty = crate::layout::resolve(&self.cx.checked.types, ty);
+        matches!(ty.elem(), Some(Type::Chan(..)))
+    }
+
+    /// Binds `sym` to a table of the addresses of the channels `items`.
+    fn chan_table(&mut self, sym: occ_compiler::checked::SymbolId, items: &[Expr]) -> Res<()> {
+        let off = self.frame.alloc(8 * items.len() as i64);
+        for (k, item) in items.iter().enumerate() {
+            let l = self.place(item)?;
+            let a = self.local_addr(off);
+            self.b.ins().store(mem(), l.addr, a, 8 * k as i32);
+        }
+        let st = Storage::ChanTable {
+            depth: self.depth,
+            offset: off,
+            len: items.len() as u32,
+        };
+        self.cx.env.insert(sym, st);
+        Ok(())
     }
 
     /// Binds `sym` by reference to place `l` (address and dimension lengths in the frame).

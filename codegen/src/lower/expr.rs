@@ -143,6 +143,14 @@ impl Tr<'_, '_> {
                     None => self.table(items, ty, e),
                 }
             }
+            ExprKind::Call { name, args } if !is_scalar(&self.cx.checked.types, &ty) => {
+                let vals = self.call_function(name, args, e.span)?;
+                self.result_loc(vals, ty, e)
+            }
+            ExprKind::Valof(v) if !is_scalar(&self.cx.checked.types, &ty) => {
+                let vals = self.valof(v)?;
+                self.result_loc(vals, ty, e)
+            }
             _ if is_scalar(&self.cx.checked.types, &ty) => {
                 let v = self.expr(e)?;
                 let size = size_of(&self.cx.checked.types, &ty).unwrap_or(8);
@@ -159,6 +167,19 @@ impl Tr<'_, '_> {
                 .cx
                 .unsupported(e.span, "this array- or record-valued expression")),
         }
+    }
+
+    /// The place of a FUNCTION's or VALOF's single array- or record-valued result.
+    fn result_loc(&mut self, vals: Vec<Value>, ty: Type, e: &Expr) -> Res<Loc> {
+        let [addr] = vals[..] else {
+            return Err(self.cx.internal(e.span, "one result expected"));
+        };
+        let ty = crate::layout::resolve(&self.cx.checked.types, &ty);
+        let dims = crate::layout::static_dims(&ty)
+            .into_iter()
+            .map(|d| self.iconst(i64::from(d.unwrap_or(0))))
+            .collect();
+        Ok(Loc { addr, ty, dims })
     }
 
     fn record_value(
@@ -184,6 +205,11 @@ impl Tr<'_, '_> {
     }
 
     fn table(&mut self, items: &[Expr], ty: Type, e: &Expr) -> Res<Loc> {
+        // A table whose context wants a RECORD (`COMPLEX FUNCTION f () IS [x, y]`) builds it.
+        if let Some(fields) = crate::layout::record_fields(&self.cx.checked.types, &ty) {
+            return self.record_value(items, fields, ty, e);
+        }
+        let ty = crate::layout::resolve(&self.cx.checked.types, &ty);
         let Some(elem) = ty.elem().cloned() else {
             return Err(self.cx.internal(e.span, "table of non-array type"));
         };

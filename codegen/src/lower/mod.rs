@@ -65,6 +65,16 @@ pub enum Storage {
         /// Byte offset of the address word.
         offset: i32,
     },
+    /// A table of channels abbreviated (`ins IS [d, c] :`): the `len` words at `offset` hold
+    /// the channels' addresses, so that `ins[i]` is the channel itself, not a copy of its word.
+    ChanTable {
+        /// Lexical depth of the owning function.
+        depth: u32,
+        /// Byte offset of the first address word.
+        offset: i32,
+        /// The number of channels.
+        len: u32,
+    },
     /// A compile-time constant.
     Const(Const),
     /// A compiled PROC.
@@ -130,7 +140,7 @@ pub struct Compiler<'p> {
 
 impl<'p> Compiler<'p> {
     /// Starts compiling `checked` (spans mapped through `map`) with the intrinsics of `set`;
-    /// fails on the first EXTERNAL that cannot be bound (see [`crate::link`]).
+    /// fails with every EXTERNAL that cannot be bound (see [`crate::link`]).
     pub fn new(
         checked: &'p CheckedProgram,
         map: &'p SourceMap,
@@ -138,13 +148,8 @@ impl<'p> Compiler<'p> {
     ) -> Res<Compiler<'p>> {
         let decl_syms = checked.symbols.iter().map(|(id, s)| (s.span, id)).collect();
         let bindings = crate::link::bind_externals(checked, set);
-        if let Some(e) = bindings.errors.first() {
-            let (file, line) = file_line(map, e.span);
-            return Err(CodegenError::Link {
-                file,
-                line,
-                what: e.message.clone(),
-            });
+        if !bindings.errors.is_empty() {
+            return Err(CodegenError::Link(bindings.errors));
         }
         Ok(Compiler {
             checked,
@@ -184,20 +189,16 @@ impl<'p> Compiler<'p> {
 
     /// An "unsupported" error at `span`.
     pub fn unsupported(&self, span: Span, what: impl Into<String>) -> CodegenError {
-        let (file, line) = self.file_line(span);
         CodegenError::Unsupported {
-            file,
-            line,
+            span,
             what: what.into(),
         }
     }
 
     /// An "internal" error at `span`.
     pub fn internal(&self, span: Span, what: impl Into<String>) -> CodegenError {
-        let (file, line) = self.file_line(span);
         CodegenError::Internal {
-            file,
-            line,
+            span,
             what: what.into(),
         }
     }

@@ -157,7 +157,15 @@ impl Tr<'_, '_> {
                 BinOp::Add | BinOp::Plus => ins.fadd(a, b),
                 BinOp::Sub | BinOp::Minus => ins.fsub(a, b),
                 BinOp::Mul | BinOp::Times => ins.fmul(a, b),
-                BinOp::Div => ins.fdiv(a, b),
+                BinOp::Div => {
+                    let zero = match p {
+                        Prim::Real32 => ins.f32const(0.0),
+                        _ => ins.f64const(0.0),
+                    };
+                    let nz = self.b.ins().fcmp(FloatCC::NotEqual, b, zero);
+                    self.check(nz, ErrorKind::Floating, span);
+                    self.b.ins().fdiv(a, b)
+                }
                 BinOp::Rem => {
                     let q = ins.fdiv(a, b);
                     // IEEE remainder: the quotient rounded to nearest (ties to even).

@@ -84,6 +84,10 @@ impl Tr<'_, '_> {
                 let c = c.clone();
                 self.const_loc(&c, ty, span)
             }
+            Storage::ChanTable { .. } => Err(self.cx.unsupported(
+                span,
+                "a table of channels used whole (only its elements can be used)",
+            )),
             _ => Err(self.cx.internal(span, "a PROC or FUNCTION used as a value")),
         }
     }
@@ -178,6 +182,29 @@ impl Tr<'_, '_> {
     }
 
     fn subscript(&mut self, base: &Expr, index: &Expr, span: Span) -> Res<Loc> {
+        if let ExprKind::Name(n) = &base.kind
+            && let Some(Storage::ChanTable { depth, offset, len }) =
+                self.cx.env.get(&self.cx.symbol(n)?).cloned()
+        {
+            let i = self.int_index(index)?;
+            let ok = self
+                .b
+                .ins()
+                .icmp_imm_s(IntCC::UnsignedLessThan, i, i64::from(len));
+            self.check(ok, ErrorKind::Subscript, span);
+            let f = self.frame_at(depth);
+            let slot = self.b.ins().iadd_imm_s(f, i64::from(offset));
+            let off = self.b.ins().imul_imm_s(i, 8);
+            let slot = self.b.ins().iadd(slot, off);
+            let addr = self.b.ins().load(types::I64, mem(), slot, 0);
+            let ty = self.cx.type_of(base)?;
+            let ty = crate::layout::resolve(&self.cx.checked.types, &ty);
+            return Ok(Loc {
+                addr,
+                ty: ty.elem().cloned().unwrap_or(Type::Error),
+                dims: vec![],
+            });
+        }
         let b = self.place(base)?;
         let table = &self.cx.checked.types;
         if let Type::Named(id) = table.underlying(&b.ty)

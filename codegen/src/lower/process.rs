@@ -86,6 +86,11 @@ impl Tr<'_, '_> {
         let (idx_off, left_off) = (self.frame.alloc(8), self.frame.alloc(8));
         let base = self.expr(&r.base)?;
         let count = self.expr(&r.count)?;
+        let counts = self
+            .b
+            .ins()
+            .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, count, 0);
+        self.check(counts, ErrorKind::ReplicatorCount, r.count.span);
         let step_off = self.frame.alloc(8);
         let step = match &r.step {
             Some(s) => self.expr(s)?,
@@ -280,11 +285,11 @@ impl Tr<'_, '_> {
         }
         // Multiple assignment: evaluate every value first, then store.
         let vals: Vec<(Value, Type)> = if rhs.len() == 1 && lhs.len() > 1 {
-            let (name, args) = match &rhs[0].kind {
-                ExprKind::Call { name, args } => (name, args),
+            let vs = match &rhs[0].kind {
+                ExprKind::Call { name, args } => self.call_function(name, args, span)?,
+                ExprKind::Valof(v) => self.valof(v)?,
                 _ => return Err(self.cx.internal(span, "multiple assignment from one value")),
             };
-            let vs = self.call_function(name, args, span)?;
             vs.into_iter().map(|v| (v, Type::Error)).collect()
         } else {
             let mut out = Vec::new();

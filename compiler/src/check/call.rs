@@ -80,8 +80,10 @@ impl Checker {
     /// Checks a VALOF and returns its result types, checking them against `wants` when given.
     pub(super) fn valof_types(&mut self, v: &ast::Valof, wants: &[Type]) -> Vec<Type> {
         let mark = self.open_scope();
+        self.valof_depth += 1;
         self.decls(&v.decls);
         self.process(&v.body);
+        self.valof_depth -= 1;
         let mut tys = Vec::with_capacity(v.results.len());
         for (i, r) in v.results.iter().enumerate() {
             let want = wants.get(i);

@@ -431,7 +431,11 @@ impl Checker {
         self.open_procs.push(name.text.clone());
         self.push_frame();
         if let Some(body) = body {
+            // A PROC's body is checked where it is declared, not where it runs.
+            let outer = (self.valof_depth, self.high_priority);
+            (self.valof_depth, self.high_priority) = (0, false);
             self.process(body);
+            (self.valof_depth, self.high_priority) = outer;
         }
         if let Some(f) = function {
             self.param_names = if all_val { names.clone() } else { Vec::new() };
@@ -500,7 +504,8 @@ impl Checker {
                             expected: results.len(),
                             found,
                         },
-                        v.span,
+                        // At the RESULT, as occ21 reports it.
+                        v.results.first().map_or(v.span, |e| e.span),
                     );
                 }
             }

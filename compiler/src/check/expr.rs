@@ -272,6 +272,12 @@ impl Checker {
                 None => (Type::INT, integer(*value, *hex, negate, Prim::Int)),
             },
             LitKind::Real(text) => {
+                if text
+                    .find(['E', 'e'])
+                    .is_some_and(|e| !text[e + 1..].starts_with(['+', '-']))
+                {
+                    self.error(DiagnosticKind::ExponentSign, span);
+                }
                 let p = ctx_prim.filter(|p| p.is_real()).unwrap_or(Prim::Real64);
                 let text = if negate {
                     format!("-{text}")
@@ -543,8 +549,6 @@ impl Checker {
         }
         let want_under = want.map(|w| self.out.types.underlying(w).clone());
         let mut elem = want_under.as_ref().and_then(Type::elem).cloned();
-        // An untyped table takes a named array type from context: `v := [1.0, 0.0, 0.0]`.
-        let untyped = !items.is_empty() && items.iter().all(is_untyped);
         // Typed items first, so that `[2, 4(int)]` is a table of `int`.
         let typed = items.iter().enumerate().filter(|(_, i)| !is_untyped(i));
         let untyped_items = items.iter().enumerate().filter(|(_, i)| is_untyped(i));
@@ -568,8 +572,10 @@ impl Checker {
         let fits = want_under
             .as_ref()
             .is_some_and(|u| self.out.types.compatible(u, &ty));
+        // A table is a value of the named array type its context wants when its items fit:
+        // `COMPLEX FUNCTION neg (VAL COMPLEX x) IS [-x[re], -x[im]]` (occ21 accepts it).
         let ty = match want {
-            Some(w @ Type::Named(_)) if untyped && fits => w.clone(),
+            Some(w @ Type::Named(_)) if fits => w.clone(),
             _ => ty,
         };
         Typed::constant(ty, values.map(Value::Array))

@@ -89,6 +89,10 @@ pub(crate) struct Checker {
     tables: crate::usage::Tables,
     /// Index values of replicators with constant base, count and step (and a small count).
     repl_values: crate::fxhash::FxHashMap<SymbolId, Vec<i64>>,
+    /// Above zero inside a VALOF (a FUNCTION body or value process): no PAR or ALT there.
+    valof_depth: u32,
+    /// Inside the first (high-priority) branch of a PRI PAR: no PRI PAR there.
+    high_priority: bool,
 }
 
 /// Checks that a program can switch off, as occ21's `#OPTION` letters do.
@@ -110,21 +114,16 @@ impl Default for Options {
 }
 
 impl Options {
-    /// Reads the `#OPTION "..."` directives of a source text: `A` switches alias checking off and
-    /// `N` usage checking, as in occ21. Other letters are accepted and ignored.
-    pub fn from_source(text: &str) -> Options {
+    /// Reads the letters of a program's `#OPTION` directives, as the preprocessor records them
+    /// ([`occ_grammar::Parsed::options`]): `A` switches alias checking off and `N` usage
+    /// checking, as in occ21. Other letters are accepted and ignored.
+    pub fn from_letters(letters: &str) -> Options {
         let mut o = Options::default();
-        for line in text.lines() {
-            let Some(rest) = line.trim_start().strip_prefix("#OPTION") else {
-                continue;
-            };
-            let letters = rest.trim().trim_matches('"');
-            for ch in letters.chars().take_while(|c| *c != '"') {
-                match ch.to_ascii_uppercase() {
-                    'A' => o.alias = false,
-                    'N' => o.usage = false,
-                    _ => {}
-                }
+        for ch in letters.chars() {
+            match ch.to_ascii_uppercase() {
+                'A' => o.alias = false,
+                'N' => o.usage = false,
+                _ => {}
             }
         }
         o
@@ -175,6 +174,8 @@ impl Checker {
             fn_bodies: Default::default(),
             tables: Vec::new(),
             repl_values: Default::default(),
+            valof_depth: 0,
+            high_priority: false,
         };
         for pragma in &program.pragmas {
             let set = match pragma.kind {

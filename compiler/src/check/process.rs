@@ -44,19 +44,37 @@ impl Checker {
                 }
                 self.close_scope(mark);
             }
-            ProcessKind::Par { repl, body, .. } => self.par(repl.as_deref(), body),
+            ProcessKind::Par {
+                repl, body, pri, ..
+            } => {
+                self.not_in_valof("PAR", p.span);
+                if *pri && self.high_priority {
+                    self.error(DiagnosticKind::NestedPriPar, p.span);
+                }
+                self.par(repl.as_deref(), body, *pri);
+            }
             ProcessKind::Processor { number, body } => {
                 self.condition(number, &Type::INT);
                 self.process(body);
             }
             ProcessKind::If { repl, choices } => self.if_(repl.as_deref(), choices),
-            ProcessKind::Alt(alt) => self.alt(alt),
+            ProcessKind::Alt(alt) => {
+                self.not_in_valof("ALT", p.span);
+                self.alt(alt);
+            }
             ProcessKind::Case { selector, options } => self.case(selector, options),
             ProcessKind::While { cond, body } => {
                 self.condition(cond, &Type::BOOL);
                 self.process(body);
             }
             ProcessKind::Call { name, args } => self.proc_call(name, args, p.span),
+        }
+    }
+
+    /// Reports `what` (PAR or ALT) when it is inside a VALOF, where occam does not allow it.
+    fn not_in_valof(&mut self, what: &'static str, span: ast::Span) {
+        if self.valof_depth > 0 {
+            self.error(DiagnosticKind::NotInValof { what }, span);
         }
     }
 
@@ -256,6 +274,9 @@ impl Checker {
             self.error(DiagnosticKind::BadOperand { op: "CASE", ty }, selector.span);
         }
         let mut seen: Vec<Value> = Vec::new();
+        for extra in options.iter().filter(|o| o.values.is_none()).skip(1) {
+            self.error(DiagnosticKind::DuplicateElse, extra.span);
+        }
         for o in options {
             let mark = self.open_scope();
             self.decls(&o.decls);
@@ -288,14 +309,19 @@ impl Checker {
 
     /// Checks a PAR: each branch separately, then every pair of branches (and, for a
     /// replicated PAR, every pair of instances) against the usage rules.
-    fn par(&mut self, repl: Option<&ast::Replicator>, body: &[Process]) {
+    /// Checks a PAR's branches and the usage rules between them; in a PRI PAR the first
+    /// branch runs at high priority.
+    fn par(&mut self, repl: Option<&ast::Replicator>, body: &[Process], pri: bool) {
         let first = self.next_symbol();
         let mark = self.open_scope();
         let r = repl.map(|r| self.replicator(r));
         let mut branches: Vec<Vec<Access>> = Vec::with_capacity(body.len());
-        for p in body {
+        let outer = self.high_priority;
+        for (k, p) in body.iter().enumerate() {
             self.push_frame();
+            self.high_priority = outer || (pri && repl.is_none() && k == 0);
             self.process(p);
+            self.high_priority = outer;
             let mut accesses = self.pop_frame();
             accesses.retain(|a| a.symbol < first);
             usage::dedup(&mut accesses);

@@ -190,14 +190,13 @@ fn every_error_is_reported_not_just_the_first() {
 
 /// Renders the full report of the first diagnostic, as `occ check` shows it (without colour).
 fn render(src: &str) -> String {
-    use miette::{GraphicalReportHandler, GraphicalTheme, NamedSource};
+    use miette::{GraphicalReportHandler, GraphicalTheme};
     let parsed = occ_grammar::parse_source("t.occ", src, &mut HashMap::new());
     let (_, diags) = crate::check(&parsed.program);
-    let Some(d) = diags.into_iter().next() else {
+    let Some(d) = diags.first() else {
         return "no diagnostics".into();
     };
-    let report =
-        miette::Report::new(d).with_source_code(NamedSource::new("t.occ", src.to_string()));
+    let report = d.to_diagnostic().to_report(&parsed.map);
     let mut out = String::new();
     let handler =
         GraphicalReportHandler::new_themed(GraphicalTheme::unicode_nocolor()).with_width(100);

@@ -15,7 +15,7 @@ mod condition;
 mod test;
 
 use crate::ast::{Name, Pragma, PragmaKind, Span};
-use crate::diagnostic::{Diagnostic, Place, Severity};
+use crate::diagnostic::{Diagnostic, Place};
 use crate::external::ExternalText;
 use crate::source_map::{LineOrigin, Location, SourceFile, SourceMap};
 use condition::Value;
@@ -52,6 +52,10 @@ pub struct Preprocessed {
     pub pragmas: Vec<Pragma>,
     /// The header strings of the `#PRAGMA EXTERNAL` directives, for [`crate::external::parse`].
     pub externals: Vec<ExternalText>,
+    /// The letters of every `#OPTION "..."` that took effect (not inside a false `#IF`; in
+    /// included files too), in order: occ21's compiler options (`A` no alias checks, `N` no
+    /// usage checks).
+    pub options: String,
     /// Errors and warnings about directives.
     pub diagnostics: Vec<Diagnostic>,
 }
@@ -67,10 +71,16 @@ pub fn preprocess(path: &str, text: &str, loader: &mut dyn Loader) -> Preprocess
     pp.out
 }
 
+/// The letters of `#OPTION "letters"` (the text up to the closing quote, or the line's end).
+fn option_letters(rest: &str) -> &str {
+    let rest = rest.trim_start();
+    let rest = rest.strip_prefix('"').unwrap_or(rest);
+    rest.split('"').next().unwrap_or("").trim()
+}
+
 fn predefines() -> HashMap<String, Value> {
     let mut defines = HashMap::new();
     defines.insert("TARGET.BITS.PER.WORD".to_string(), Value::Int(32));
-    defines.insert("COMPILER.TOCK".to_string(), Value::Bool(true));
     defines.insert("OCC".to_string(), Value::Bool(true));
     defines
 }
@@ -195,13 +205,8 @@ impl Preprocessor<'_> {
     }
 
     fn error(&mut self, at: Location, message: &str, label: &str) {
-        self.out.diagnostics.push(Diagnostic {
-            severity: Severity::Error,
-            message: message.to_string(),
-            label: label.to_string(),
-            help: None,
-            place: Place::File(at),
-        });
+        let diag = Diagnostic::at(Place::File(at), message, label).with_code("preprocess");
+        self.out.diagnostics.push(diag);
     }
 
     fn directive(
@@ -231,7 +236,8 @@ impl Preprocessor<'_> {
                 self.defines.remove(rest.trim());
             }
             "PRAGMA" => self.pragma(line, rest),
-            "OPTION" | "COMMENT" | "IMPORT" | "RELAX" => {}
+            "OPTION" => self.out.options.push_str(option_letters(rest)),
+            "COMMENT" | "IMPORT" | "RELAX" => {}
             _ => {
                 let at = line.whole(&self.out.map);
                 let message = format!("unknown directive #{word}");
@@ -317,13 +323,10 @@ impl Preprocessor<'_> {
             _ => {
                 let at = line.whole(&self.out.map);
                 let message = format!("#PRAGMA {word} is ignored");
-                let diag = Diagnostic {
-                    severity: Severity::Warning,
-                    message,
-                    label: "this pragma has no effect here".to_string(),
-                    help: None,
-                    place: Place::File(at),
-                };
+                let diag =
+                    Diagnostic::at(Place::File(at), message, "this pragma has no effect here")
+                        .with_code("preprocess")
+                        .warning();
                 return self.out.diagnostics.push(diag);
             }
         };

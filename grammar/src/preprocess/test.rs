@@ -2,6 +2,7 @@
 //! conditionals, defines, pragmas and the line map back to the original files.
 
 use super::*;
+use crate::diagnostic::Severity;
 
 fn run(root: &str, files: &[(&str, &str)]) -> Preprocessed {
     let mut loader: HashMap<String, String> = files
@@ -94,7 +95,7 @@ fn use_finds_module_then_inc_then_occ() {
 
 #[test]
 fn if_else_selects_one_branch_and_skips_the_other_unlexed() {
-    let text = "#IF DEFINED (COMPILER.TOCK)\nyes\n#ELSE\n$$ not occam $$\n#ENDIF\n";
+    let text = "#IF DEFINED (OCC)\nyes\n#ELSE\n$$ not occam $$\n#ENDIF\n";
     let out = run(text, &[]);
     assert_eq!(lines(&out), ["yes"]);
 }
@@ -216,4 +217,14 @@ fn shared_pragma_name_spans_survive_a_trailing_comment() {
     let out = preprocess("main.occ", text, &mut HashMap::new());
     let span = out.pragmas[0].names[0].span;
     assert_eq!(&text[span.start..span.end], "abc");
+}
+
+#[test]
+fn option_letters_are_recorded_where_they_take_effect() {
+    let out = run(
+        "#OPTION \"A\"\n#IF FALSE\n#OPTION \"N\"\n#ENDIF\n#INCLUDE \"opts.inc\"\n",
+        &[("opts.inc", "#OPTION \"EV\" -- a comment\n")],
+    );
+    assert!(out.diagnostics.is_empty(), "{:?}", messages(&out));
+    assert_eq!(out.options, "AEV");
 }

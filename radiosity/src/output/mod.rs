@@ -1,11 +1,13 @@
 //! The outputs of a solve, as bytes or text (the caller writes the files): `report.json`,
-//! `convergence.csv`/`.png`, `image.png`, `solution.ply` and `probe.csv`.
+//! `convergence.csv`/`.png`, `image.png`, `solution.ply` and `probe.csv`, and the path-traced
+//! truth (`pathtrace.json`).
 
 pub mod image;
 pub mod plot;
 pub mod ply;
 pub mod probe;
 pub mod report;
+pub mod truth;
 
 /// An output error.
 #[derive(Debug, thiserror::Error)]

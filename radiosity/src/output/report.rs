@@ -103,6 +103,9 @@ pub struct Report {
     pub links: Vec<serde_json::Value>,
     /// Final relative RMS error against `--reference`, if given.
     pub rms_error: Option<f64>,
+    /// Each object's error against the path-traced truth (`--reference-mc`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth: Option<Vec<super::truth::ObjectError>>,
 }
 
 /// Builds the report of a finished solve.
@@ -149,6 +152,7 @@ pub fn build(solver: &Solver, file: &str, timings: Timings) -> Report {
         }],
         links: Vec::new(),
         rms_error: solver.rms_error(),
+        truth: None,
     }
 }
 
@@ -186,4 +190,78 @@ pub fn reference_means(
         return Err(err("no object name matches the scene".into()));
     }
     Ok(names.iter().map(|n| by_name.get(n).copied()).collect())
+}
+
+/// Warnings when a reference report does not describe this scene: objects of the scene it
+/// lacks, objects it has that the scene lacks, and objects whose areas differ by more than 1%
+/// (`objects` gives this scene's names and areas). Unreadable references give no warning here
+/// ([`reference_means`] reports them).
+pub fn reference_mismatch(file: &str, text: &str, objects: &[(String, f64)]) -> Vec<String> {
+    let Ok(value) = serde_json::from_str::<serde_json::Value>(text) else {
+        return Vec::new();
+    };
+    let Some(theirs) = value.get("objects").and_then(|o| o.as_array()) else {
+        return Vec::new();
+    };
+    let theirs: std::collections::HashMap<&str, Option<f64>> = theirs
+        .iter()
+        .filter_map(|o| {
+            let name = o.get("name")?.as_str()?;
+            Some((name, o.get("area").and_then(|a| a.as_f64())))
+        })
+        .collect();
+    let mut out = Vec::new();
+    let missing: Vec<&str> = objects
+        .iter()
+        .filter(|(n, _)| !theirs.contains_key(n.as_str()))
+        .map(|(n, _)| n.as_str())
+        .collect();
+    if !missing.is_empty() {
+        out.push(format!(
+            "{file}: no reference for object(s) {}",
+            missing.join(", ")
+        ));
+    }
+    let ours: std::collections::HashSet<&str> = objects.iter().map(|(n, _)| n.as_str()).collect();
+    let mut extra: Vec<&str> = theirs
+        .keys()
+        .copied()
+        .filter(|n| !ours.contains(n))
+        .collect();
+    extra.sort_unstable();
+    if !extra.is_empty() {
+        out.push(format!(
+            "{file}: the reference has object(s) this scene lacks: {}",
+            extra.join(", ")
+        ));
+    }
+    for (name, area) in objects {
+        if let Some(Some(r)) = theirs.get(name.as_str()) {
+            if (area - r).abs() > 0.01 * r.abs().max(*area) {
+                out.push(format!(
+                    "{file}: object {name} has area {area:.4e} here and {r:.4e} in the \
+                     reference: a different scene?"
+                ));
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_reference_of_another_scene_is_warned_about() {
+        let text = r#"{"objects": [{"name": "floor", "area": 100.0, "mean_b": [1, 1, 1]},
+                                   {"name": "lamp", "area": 1.0, "mean_b": [1, 1, 1]}]}"#;
+        let same = [("floor".to_string(), 100.0), ("lamp".to_string(), 1.0)];
+        assert!(reference_mismatch("r.json", text, &same).is_empty());
+        let other = [("floor".to_string(), 150.0), ("wall".to_string(), 1.0)];
+        let w = reference_mismatch("r.json", text, &other).join("\n");
+        assert!(w.contains("no reference for object(s) wall"), "{w}");
+        assert!(w.contains("lacks: lamp"), "{w}");
+        assert!(w.contains("object floor has area"), "{w}");
+    }
 }

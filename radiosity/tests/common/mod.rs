@@ -46,3 +46,38 @@ pub fn closed_box(lo: Vec3, hi: Vec3, reflectance: f32, emission: impl Fn(usize)
     }
     scene
 }
+
+/// A square `x, z ∈ [-half, half]` at height `y` facing `up` or down, as two triangles of object
+/// `object`.
+pub fn square(half: f32, y: f32, up: bool, object: u32) -> [SceneTri; 2] {
+    let p = [
+        Vec3::new(-half, y, -half),
+        Vec3::new(half, y, -half),
+        Vec3::new(half, y, half),
+        Vec3::new(-half, y, half),
+    ];
+    let mut t = [Tri::new(p[0], p[2], p[1]), Tri::new(p[0], p[3], p[2])];
+    if (t[0].normal().y > 0.0) != up {
+        t = [Tri::new(p[0], p[1], p[2]), Tri::new(p[0], p[2], p[3])];
+    }
+    t.map(|tri| SceneTri { tri, object })
+}
+
+/// A unit square light (`Ke = 1`, black) facing down at height 1 over a floor of half-width
+/// `floor_half` (`Kd = 0.5`) at height 0, open all round.
+pub fn light_over_floor(floor_half: f32) -> Scene {
+    let mut scene = Scene::default();
+    scene.objects.push(Object {
+        name: "light".into(),
+        reflectance: Vec3::ZERO,
+        emission: Vec3::ONE,
+    });
+    scene.objects.push(Object {
+        name: "floor".into(),
+        reflectance: Vec3::splat(0.5),
+        emission: Vec3::ZERO,
+    });
+    scene.triangles.extend(square(0.5, 1.0, false, 0));
+    scene.triangles.extend(square(floor_half, 0.0, true, 1));
+    scene
+}

@@ -26,6 +26,7 @@
 //! crates state their entries.
 
 mod maths;
+pub mod realfmt;
 mod strings;
 
 /// The occam kind of one intrinsic parameter.
@@ -256,6 +257,18 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: strings::real64_to_string as *const u8,
     },
     real_fn!("SUM.REAL64", [ValReal64s], F64, strings::sum_real64),
+    Intrinsic {
+        name: "COURSE.REAL32TOSTRING",
+        params: &[ResultInt, VarBytes, ValReal32, ValInt, ValInt],
+        result: None,
+        addr: realfmt::real32_to_string as *const u8,
+    },
+    Intrinsic {
+        name: "COURSE.REAL64TOSTRING",
+        params: &[ResultInt, VarBytes, ValReal64, ValInt, ValInt],
+        result: None,
+        addr: realfmt::real64_to_string as *const u8,
+    },
 ];
 
 /// Finds an intrinsic of the runtime's own table by occam name.

@@ -7,7 +7,7 @@ use crate::abi::Word;
 ///
 /// # Safety
 /// `len` is a valid INT; `ptr` valid for `cap` bytes.
-unsafe fn put_string(len: *mut Word, ptr: *mut u8, cap: Word, text: &str) {
+pub(super) unsafe fn put_string(len: *mut Word, ptr: *mut u8, cap: Word, text: &str) {
     let n = text.len();
     // SAFETY: caller contract.
     unsafe {
@@ -17,6 +17,20 @@ unsafe fn put_string(len: *mut Word, ptr: *mut u8, cap: Word, text: &str) {
         }
         std::ptr::copy_nonoverlapping(text.as_ptr(), ptr, n);
         *len = n as Word;
+    }
+}
+
+/// [`put_string`] for a text that may be missing (`*len` is then -1).
+///
+/// # Safety
+/// As for [`put_string`].
+pub(super) unsafe fn put_text(len: *mut Word, ptr: *mut u8, cap: Word, text: Option<&str>) {
+    // SAFETY: caller contract.
+    unsafe {
+        match text {
+            Some(t) => put_string(len, ptr, cap, t),
+            None => *len = -1,
+        }
     }
 }
 

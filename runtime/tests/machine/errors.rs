@@ -43,7 +43,7 @@ fn runtime_error_names_file_line_kind_and_proc() {
 
 #[test]
 fn every_error_kind_has_a_code_and_message() {
-    for code in 0..12 {
+    for code in 0..15 {
         let k = ErrorKind::from_code(code).expect("kind");
         assert_eq!(k as Word, code);
         assert!(!k.describe().is_empty());
@@ -59,10 +59,15 @@ fn every_error_kind_has_a_code_and_message() {
         (ErrorKind::Overflow, "overflow"),
         (ErrorKind::DivideByZero, "division"),
         (ErrorKind::Assert, "assert"),
+        (ErrorKind::Floating, "floating-point"),
+        (ErrorKind::ReplicatorCount, "replicator count"),
     ] {
         assert!(k.describe().to_lowercase().contains(word), "{k:?}");
     }
-    assert_eq!(ErrorKind::from_code(12), None);
+    assert_eq!(ErrorKind::from_code(12), Some(ErrorKind::Stopped));
+    assert_eq!(ErrorKind::from_code(13), Some(ErrorKind::Floating));
+    assert_eq!(ErrorKind::from_code(14), Some(ErrorKind::ReplicatorCount));
+    assert_eq!(ErrorKind::from_code(15), None);
     assert_eq!(ErrorKind::from_code(-1), None);
 }
 

@@ -1,0 +1,54 @@
+//! End-to-end behaviour of `occ check`: what a user sees for a diagnostic.
+
+use std::fs;
+use std::process::Command;
+
+/// `occ check` on `source` (written to a temporary file): exit success and stderr.
+fn occ_check(name: &str, source: &str) -> (bool, String) {
+    let dir = std::env::temp_dir().join(format!("occ-check-{}-{name}", std::process::id()));
+    fs::create_dir_all(&dir).expect("temporary folder");
+    let file = dir.join("prog.occ");
+    fs::write(&file, source).expect("program file");
+    let output = Command::new(env!("CARGO_BIN_EXE_occ"))
+        .arg("check")
+        .arg(&file)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the occ binary runs");
+    let _ = fs::remove_dir_all(&dir);
+    (
+        output.status.success(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+/// A PAR usage error has two labels, one in each branch; both reach the user, with the help and
+/// the code.
+#[test]
+fn a_par_usage_error_shows_every_label() {
+    let source = "PROC p ()\n  INT x, y:\n  PAR\n    x := 1\n    y := x\n:\n";
+    let (ok, stderr) = occ_check("par", source);
+    assert!(!ok, "{stderr}");
+    for text in [
+        "`x` is written in one branch of this PAR and used in another",
+        "used in this branch",
+        "written in another branch",
+        "give each branch its own copy of `x`",
+        "check::ParUsage",
+        "prog.occ:5:",
+    ] {
+        assert!(stderr.contains(text), "missing `{text}` in\n{stderr}");
+    }
+}
+
+/// A preprocessor error points into the file with a label.
+#[test]
+fn a_missing_include_is_a_labelled_diagnostic() {
+    let (ok, stderr) = occ_check(
+        "include",
+        "#INCLUDE \"no-such-file.inc\"\nPROC p ()\n  SKIP\n:\n",
+    );
+    assert!(!ok, "{stderr}");
+    assert!(stderr.contains("prog.occ:1:"), "{stderr}");
+    assert!(stderr.contains("no-such-file.inc"), "{stderr}");
+}

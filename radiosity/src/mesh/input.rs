@@ -1,0 +1,148 @@
+//! The first step of meshing: the scene's triangles with their corners welded by position, and
+//! degenerate input dropped or counted (see [`InputCounts`]).
+
+use glam::DVec3;
+use rustc_hash::FxHashMap;
+
+use crate::grid::PointIndex;
+use crate::scene::Scene;
+
+/// A scene triangle after welding: corner indices into [`Input::positions`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Face {
+    /// Corners, counter-clockwise seen from the front.
+    pub v: [u32; 3],
+    /// Scene object.
+    pub object: u32,
+    /// Unit front normal.
+    pub normal: DVec3,
+}
+
+/// What welding found in the input, counted for the report.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct InputCounts {
+    /// Triangles dropped because welding merged two of their corners: features smaller than
+    /// the weld distance (1e-5 of the scene's diagonal).
+    pub collapsed: usize,
+    /// Triangles dropped because another triangle of the same object has the same corners
+    /// and the same orientation.
+    pub duplicates: usize,
+    /// Pairs of triangles with the same corners and opposite orientations: a two-sided
+    /// surface, meshed as two one-sided ones.
+    pub two_sided: usize,
+    /// Triangles narrower than the weld distance (their height over the longest edge): never
+    /// cut, only bisected along their length.
+    pub slivers: usize,
+    /// Edges shared by more than two triangles.
+    pub non_manifold_edges: usize,
+    /// Edges where two triangles of one object meet with inconsistent orientations (one of
+    /// them faces the other way: a flipped normal). They are meshed as given; radiosity
+    /// surfaces are one-sided, so a flipped triangle receives light from its other side.
+    pub flipped_edges: usize,
+}
+
+/// The welded input.
+pub struct Input {
+    /// Corner positions.
+    pub positions: Vec<DVec3>,
+    /// Triangles kept.
+    pub faces: Vec<Face>,
+    /// What was found.
+    pub counts: InputCounts,
+}
+
+/// Welds the scene's triangle corners within `tol`, drops collapsed and duplicate triangles and
+/// counts the rest of what [`InputCounts`] lists.
+pub fn weld(scene: &Scene, tol: f64) -> Input {
+    let mut positions: Vec<DVec3> = Vec::new();
+    let mut index = PointIndex::new(tol);
+    let mut faces = Vec::with_capacity(scene.triangles.len());
+    let mut counts = InputCounts::default();
+    let mut seen: FxHashMap<([u32; 3], u32), bool> = FxHashMap::default();
+    for t in &scene.triangles {
+        let v = t.tri.v.map(|p| {
+            let p = p.as_dvec3();
+            index
+                .find(p, |i| positions[i as usize], |_| true)
+                .unwrap_or_else(|| {
+                    positions.push(p);
+                    let id = positions.len() as u32 - 1;
+                    index.insert(id, p);
+                    id
+                })
+        });
+        if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
+            counts.collapsed += 1;
+            continue;
+        }
+        let [a, b, c] = v.map(|i| positions[i as usize]);
+        let cross = (b - a).cross(c - a);
+        if cross.length_squared() == 0.0 {
+            counts.collapsed += 1;
+            continue;
+        }
+        // The same corners: a duplicate if the cyclic order is the same, two-sided if reversed.
+        let mut sorted = v;
+        sorted.sort_unstable();
+        let even = cyclic_rank(v) == cyclic_rank(sorted);
+        match seen.get(&(sorted, t.object)) {
+            Some(&e) if e == even => {
+                counts.duplicates += 1;
+                continue;
+            }
+            Some(_) => counts.two_sided += 1,
+            None => {
+                seen.insert((sorted, t.object), even);
+            }
+        }
+        let longest = [(a, b), (b, c), (c, a)]
+            .iter()
+            .map(|(p, q)| (*q - *p).length())
+            .fold(0.0, f64::max);
+        if cross.length() / longest < tol {
+            counts.slivers += 1;
+        }
+        faces.push(Face {
+            v,
+            object: t.object,
+            normal: cross.normalize(),
+        });
+    }
+    count_edges(&faces, &mut counts);
+    Input {
+        positions,
+        faces,
+        counts,
+    }
+}
+
+/// 0 or 1: the parity of the rotation that sorts three distinct indices.
+fn cyclic_rank(v: [u32; 3]) -> u32 {
+    // Rotate the smallest first; the order of the other two gives the orientation.
+    let i = (0..3).min_by_key(|&i| v[i]).unwrap_or(0);
+    u32::from(v[(i + 1) % 3] > v[(i + 2) % 3])
+}
+
+/// Counts non-manifold edges and edges of one object whose two triangles disagree on
+/// orientation (both run the edge the same way).
+fn count_edges(faces: &[Face], counts: &mut InputCounts) {
+    let mut edges: FxHashMap<(u32, u32), Vec<(u32, bool)>> = FxHashMap::default();
+    for (i, f) in faces.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (f.v[k], f.v[(k + 1) % 3]);
+            edges
+                .entry((a.min(b), a.max(b)))
+                .or_default()
+                .push((i as u32, a < b));
+        }
+    }
+    for around in edges.values() {
+        if around.len() > 2 {
+            counts.non_manifold_edges += 1;
+        } else if let [(f, d), (g, e)] = around[..] {
+            if d == e && faces[f as usize].object == faces[g as usize].object {
+                counts.flipped_edges += 1;
+            }
+        }
+    }
+}

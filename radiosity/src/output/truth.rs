@@ -1,0 +1,185 @@
+//! The path-traced ground truth as a file (`pathtrace.json`, and the references stored beside the
+//! scenes), and the solver's error against it (the `truth` section of `report.json`).
+//!
+//! A reference file is read by `--reference` like any `report.json`: its `objects` carry `name`
+//! and `mean_b`; they also carry `std_err`, and the file says how it was made (`command`).
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::OutputError;
+use super::probe::Probe;
+use crate::pathtrace::{Estimate, PathTraceConfig};
+use crate::scene::Scene;
+
+/// One object's path-traced mean radiosity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ObjectTruth {
+    /// OBJ `o`/`g` name.
+    pub name: String,
+    /// Area in scene units squared.
+    pub area: f64,
+    /// Mean radiosity B (RGB).
+    pub mean_b: [f64; 3],
+    /// Standard error of `mean_b`.
+    pub std_err: [f64; 3],
+}
+
+/// One probe's path-traced radiosity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ProbeTruth {
+    /// Position.
+    pub pos: [f32; 3],
+    /// Unit normal.
+    pub normal: [f32; 3],
+    /// B (RGB) and its standard error; `None` when no surface faces that way at the point.
+    pub b: Option<Estimate>,
+}
+
+/// A path-traced reference.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Reference {
+    /// What made it.
+    pub tool: String,
+    /// The command line that made it.
+    pub command: String,
+    /// Scene file.
+    pub scene: String,
+    /// Settings.
+    pub samples_per_object: u64,
+    /// Seed.
+    pub seed: u64,
+    /// Seconds taken (wall clock).
+    pub seconds: f64,
+    /// Per object, in scene order.
+    pub objects: Vec<ObjectTruth>,
+    /// Per probe, in file order.
+    pub probes: Vec<ProbeTruth>,
+}
+
+impl Reference {
+    /// Assembles a reference from the path tracer's estimates.
+    pub fn new(
+        scene: (&str, &Scene),
+        command: &str,
+        config: &PathTraceConfig,
+        seconds: f64,
+        objects: &[Estimate],
+        probes: &[(Probe, Option<Estimate>)],
+    ) -> Reference {
+        let areas = object_areas(scene.1);
+        Reference {
+            tool: "occ radiosity --pathtrace".into(),
+            command: command.into(),
+            scene: scene.0.into(),
+            samples_per_object: config.samples,
+            seed: config.seed,
+            seconds,
+            objects: scene
+                .1
+                .objects
+                .iter()
+                .zip(objects)
+                .zip(areas)
+                .map(|((o, e), area)| ObjectTruth {
+                    name: o.name.clone(),
+                    area,
+                    mean_b: e.mean,
+                    std_err: e.std_err,
+                })
+                .collect(),
+            probes: probes
+                .iter()
+                .map(|(p, b)| ProbeTruth {
+                    pos: p.pos.to_array(),
+                    normal: p.normal.to_array(),
+                    b: *b,
+                })
+                .collect(),
+        }
+    }
+
+    /// Parses a reference file.
+    pub fn parse(file: &str, text: &str) -> Result<Reference, OutputError> {
+        serde_json::from_str(text).map_err(|e| OutputError::Reference {
+            file: file.into(),
+            message: format!("not a path-traced reference: {e}"),
+        })
+    }
+
+    /// The reference's object of this name.
+    pub fn object(&self, name: &str) -> Option<&ObjectTruth> {
+        self.objects.iter().find(|o| o.name == name)
+    }
+}
+
+/// Each object's area, from the scene's triangles (the path tracer samples them).
+fn object_areas(scene: &Scene) -> Vec<f64> {
+    let mut areas = vec![0.0; scene.objects.len()];
+    for t in &scene.triangles {
+        areas[t.object as usize] += t.tri.area() as f64;
+    }
+    areas
+}
+
+/// One object's solver result against the truth.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ObjectError {
+    /// Object name.
+    pub name: String,
+    /// The solver's mean B.
+    pub mean_b: [f64; 3],
+    /// The path-traced mean B.
+    pub reference_b: [f64; 3],
+    /// Its standard error.
+    pub reference_std_err: [f64; 3],
+    /// `mean_b / reference_b - 1` per channel (0 where the reference is 0).
+    pub relative_error: [f64; 3],
+}
+
+/// The solver's means (per object, scene order) against the truth, matched by name.
+pub fn object_errors(names: &[String], means: &[DVec3], truth: &Reference) -> Vec<ObjectError> {
+    names
+        .iter()
+        .zip(means)
+        .filter_map(|(name, b)| {
+            let t = truth.object(name)?;
+            let rel = |c: usize| {
+                if t.mean_b[c] > 0.0 {
+                    b[c] / t.mean_b[c] - 1.0
+                } else {
+                    0.0
+                }
+            };
+            Some(ObjectError {
+                name: name.clone(),
+                mean_b: b.to_array(),
+                reference_b: t.mean_b,
+                reference_std_err: t.std_err,
+                relative_error: [rel(0), rel(1), rel(2)],
+            })
+        })
+        .collect()
+}
+
+/// A plain-text table of [`object_errors`] (percentages), for the terminal.
+pub fn error_table(errors: &[ObjectError]) -> String {
+    let mut s = format!(
+        "{:<24} {:>27} {:>27} {:>23}\n",
+        "object", "solver B (R G B)", "path-traced B (R G B)", "error % (R G B)"
+    );
+    for e in errors {
+        let f = |v: [f64; 3]| format!("{:8.4} {:8.4} {:8.4}", v[0], v[1], v[2]);
+        let p = e.relative_error.map(|x| x * 100.0);
+        s += &format!(
+            "{:<24} {:>27} {:>27} {:>7.2} {:>7.2} {:>7.2}\n",
+            e.name,
+            f(e.mean_b),
+            f(e.reference_b),
+            p[0],
+            p[1],
+            p[2]
+        );
+    }
+    s
+}
