@@ -1,6 +1,6 @@
 //! The network programs of `tests/lang/network` under `mpirun -np 4 ... --transport mpi` agree
-//! byte for byte with their in-process runs: stdout, the errors and deadlock reports on stderr,
-//! and the exit status. Needs a build with `--features mpi` and OpenMPI's `mpirun` on the path
+//! byte for byte with their in-process runs: stdout, the errors and deadlock reports on stderr
+//! (a runtime error on one rank stops all), and the exit status. Needs a build with `--features mpi` and OpenMPI's `mpirun` on the path
 //! (`cargo test -p occ --features mpi --test mpi`); without the feature this file is empty.
 #![cfg(feature = "mpi")]
 
@@ -17,6 +17,7 @@ const PROGRAMS: &[(&str, &[&str])] = &[
     ("pipeline_sort", &[]),
     ("alt_links_timeout", &[]),
     ("deadlock_two_nodes", &[]),
+    ("halt_stops_ring", &[]),
 ];
 
 fn occ(mpi: bool, file: &str, extra: &[&str]) -> Output {

@@ -15,44 +15,17 @@
 use std::time::Duration;
 
 use occ_codegen::network::NetworkOptions;
+use occ_runtime::NodeConfig;
 use occ_runtime::mpi::Mpi;
 use occ_runtime::remote::Transport;
 use occ_runtime::topology::Shape;
-use occ_runtime::{HostIo, NodeConfig};
 
 #[path = "../tests/common.rs"]
 mod common;
+#[path = "../benches/programs.rs"]
+mod programs;
 
-fn quiet_host() -> HostIo {
-    HostIo::new(
-        Box::new(std::io::empty()),
-        Box::new(std::io::sink()),
-        Box::new(std::io::sink()),
-    )
-}
-
-/// Node 0 sends `n` messages of `bytes` bytes to node 1 on link 1, which answers each with
-/// the same message back.
-fn ping_pong(n: u64, bytes: usize) -> String {
-    r"PROTOCOL MSG IS [BYTES]BYTE:
-PROC node (VAL INT id, nodes, []CHAN OF MSG in?, out!)
-  [BYTES]BYTE buf:
-  IF
-    id = 0
-      SEQ i = 0 FOR COUNT
-        SEQ
-          out[1] ! buf
-          in[1] ? buf
-    TRUE
-      SEQ i = 0 FOR COUNT
-        SEQ
-          in[0] ? buf
-          out[0] ! buf
-:
-"
-    .replace("BYTES", &bytes.to_string())
-    .replace("COUNT", &n.to_string())
-}
+use programs::{ping_pong, quiet_host};
 
 /// The best wall time of three runs of `n` round trips of `bytes` bytes between two nodes, over
 /// `mpi` or in-process (every rank makes the same calls; the time is rank 0's).

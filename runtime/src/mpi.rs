@@ -221,7 +221,7 @@ impl Driver<'_> {
             }
             self.complete_sends();
             if self.rank == 0 {
-                self.coordinate(relay, pool, out.is_empty());
+                self.coordinate(relay, net, pool, out.is_empty());
             }
             if busy {
                 idle = 0;
@@ -268,7 +268,7 @@ impl Driver<'_> {
                 }
             }
             tag::PROBE => {
-                let q = self.quiescent(relay, pool, out.is_empty());
+                let q = self.quiescent(relay, net, pool, out.is_empty());
                 let mut r = buf.to_vec();
                 r.push(q as u8);
                 r.extend_from_slice(&self.sent.to_le_bytes());
@@ -286,15 +286,25 @@ impl Driver<'_> {
         }
     }
 
-    fn quiescent(&self, relay: &Relay, pool: &PoolView<'_>, out_empty: bool) -> bool {
-        // The pool first: a node posts to the relay before it stops running.
-        pool.quiescent() && !relay.has_mail() && out_empty
+    /// Whether this rank will do nothing until a message comes: no node can run, and the
+    /// relay has nothing to act on or to send (a stop notice included).
+    fn quiescent(
+        &self,
+        relay: &Relay,
+        net: &Network,
+        pool: &PoolView<'_>,
+        out_empty: bool,
+    ) -> bool {
+        // The pool first: a node posts to the relay, or stops the network, before it stops
+        // running.
+        pool.quiescent() && !relay.has_mail() && out_empty && (self.stop_sent || !net.stopped())
     }
 
     /// Rank 0: starts a wave when quiescent, and ends the run after two agreeing ones.
-    fn coordinate(&mut self, relay: &Relay, pool: &PoolView<'_>, out_empty: bool) {
+    fn coordinate(&mut self, relay: &Relay, net: &Network, pool: &PoolView<'_>, out_empty: bool) {
         if !self.waiting {
-            if std::time::Instant::now() < self.next_wave || !self.quiescent(relay, pool, out_empty)
+            if std::time::Instant::now() < self.next_wave
+                || !self.quiescent(relay, net, pool, out_empty)
             {
                 return;
             }
