@@ -58,6 +58,10 @@ pub(crate) struct Queue {
 pub struct Node {
     /// Timeslice / preemption flag polled by compiled code at [`crate::abi::YIELD_FLAG_OFFSET`].
     pub(crate) yield_flag: AtomicU32,
+    /// The yield flag's resting value: 0, or 1 when timeslicing by count, so that every
+    /// back-edge poll reaches `rt_timeslice`, which counts. Kept beside the flag (read at
+    /// every switch to low priority) rather than derived from the config each time.
+    pub(crate) flag_rest: u32,
     /// Priority of the running process.
     pub(crate) cur_pri: Word,
     /// Run queues, indexed by priority.
@@ -115,6 +119,7 @@ impl Node {
     pub fn new(config: NodeConfig, program: Arc<ProgramInfo>, host: HostIo) -> Box<Node> {
         Box::new(Node {
             yield_flag: AtomicU32::new(0),
+            flag_rest: u32::from(config.counted_slices.is_some()),
             cur_pri: priority::LOW,
             queues: [Queue::empty(), Queue::empty()],
             interrupted: std::ptr::null_mut(),
@@ -262,10 +267,10 @@ impl Node {
         self.config.timeslice && self.config.counted_slices.is_none()
     }
 
-    /// The yield flag's resting value: held at 1 when timeslicing by count, so that every
-    /// back-edge poll reaches `rt_timeslice`, which counts.
+    /// The yield flag's resting value (see the `flag_rest` field).
+    #[inline(always)]
     pub(crate) fn flag_rest(&self) -> u32 {
-        u32::from(self.config.counted_slices.is_some())
+        self.flag_rest
     }
 
     /// The program tables used in reports.

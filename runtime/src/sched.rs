@@ -19,6 +19,10 @@ use crate::error::{ErrorKind, RunError};
 use crate::frame::{get, pri, set, wptr};
 use crate::node::Node;
 
+/// The handoff value of a node that gives way to another on its pool thread: not a process
+/// descriptor (a null workspace at low priority).
+const GIVE_WAY: Word = priority::LOW;
+
 /// Dispatches between two reads of the clock for the timer queues while processes are runnable.
 const TIMER_CHECK_INTERVAL: u64 = 64;
 
@@ -115,10 +119,14 @@ impl Node {
         ws as Word | self.cur_pri
     }
 
-    /// Picks the next frame to run and sets the current priority.
+    /// Picks the next frame to run and sets the current priority; `None` when nothing is
+    /// runnable, or when the node gives way ([`GIVE_WAY`] in the handoff slot).
     fn next_frame(&mut self) -> Option<Wptr> {
         if self.handoff != NOT_PROCESS {
             let d = std::mem::replace(&mut self.handoff, NOT_PROCESS);
+            if d == GIVE_WAY {
+                return None;
+            }
             if pri(d) == priority::LOW && !self.queues[0].front.is_null() {
                 // The parent continues the low branch that just ended: a ready high process
                 // preempts it, so it waits in the interrupted slot.
@@ -193,11 +201,11 @@ impl Node {
         loop {
             while let Some(ws) = self.next_frame() {
                 self.dispatch(ws)?;
-                if self.give_way {
-                    self.give_way = false;
-                    self.slices = 0;
-                    return Ok(Idle::Preempted);
-                }
+            }
+            if self.give_way {
+                self.give_way = false;
+                self.slices = 0;
+                return Ok(Idle::Preempted);
             }
             self.poll_events();
             if !self.queues[0].front.is_null() || !self.queues[1].front.is_null() {
@@ -319,8 +327,10 @@ pub unsafe extern "C" fn rt_timeslice(node: *mut Node, ws: Wptr) -> Status {
     }
     if node.pooled {
         node.slices += 1;
-        if node.slices >= crate::pool::TURN_SLICES {
+        if node.slices >= crate::pool::TURN_SLICES && node.handoff == NOT_PROCESS {
+            // Handing off to no process ends the dispatch loop at no cost to it.
             node.give_way = true;
+            node.handoff = GIVE_WAY;
             // SAFETY: `ws` is the running frame, on no queue.
             unsafe { node.enqueue(ws, priority::LOW) };
             return Status::BLOCKED;
