@@ -5,3 +5,4 @@ pub mod check;
 pub mod radiosity;
 pub mod run;
 pub mod test;
+pub mod transport;
