@@ -96,9 +96,14 @@ pub fn load(path: &Path, options: &Options) -> (Option<Front>, Checked) {
         Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
         Err(error) => return (None, unreadable(path, &error)),
     };
+    load_text(&path.display().to_string(), &text, options)
+}
+
+/// [`load`] for a program held in memory under the file name `name` (programs embedded in
+/// `occ`, such as carm.occ); its includes are searched for as those of a file `name`.
+pub fn load_text(name: &str, text: &str, options: &Options) -> (Option<Front>, Checked) {
     let mut loader = FsLoader::new(options);
-    let path_text = path.display().to_string();
-    let front = occ_codegen::front_end(&path_text, &text, &mut loader, &intrinsics());
+    let front = occ_codegen::front_end(name, text, &mut loader, &intrinsics());
     let map = &front.parsed.map;
     let mut diagnostics: Vec<Diag> = front
         .diagnostics

@@ -11,19 +11,15 @@
 use std::time::{Duration, Instant};
 
 use occ_codegen::network::{NetworkOptions, NetworkOutcome};
+use occ_runtime::NodeConfig;
 use occ_runtime::topology::Shape;
-use occ_runtime::{HostIo, NodeConfig};
 
 #[path = "../tests/common.rs"]
 mod common;
+#[path = "programs.rs"]
+mod programs;
 
-fn quiet_host() -> HostIo {
-    HostIo::new(
-        Box::new(std::io::empty()),
-        Box::new(std::io::sink()),
-        Box::new(std::io::sink()),
-    )
-}
+use programs::{ping_pong, quiet_host};
 
 fn options(threads: usize) -> NetworkOptions {
     NetworkOptions {
@@ -62,29 +58,6 @@ fn parallel_work(work: u64) -> String {
 :
 "
     .replace("WORK", &work.to_string())
-}
-
-/// Node 0 sends `n` messages of `bytes` bytes to node 1 on link 1, which answers each with
-/// the same message back.
-fn ping_pong(n: u64, bytes: usize) -> String {
-    r"PROTOCOL MSG IS [BYTES]BYTE:
-PROC node (VAL INT id, nodes, []CHAN OF MSG in?, out!, CHAN BYTE keyboard?, screen!, error!)
-  [BYTES]BYTE buf:
-  IF
-    id = 0
-      SEQ i = 0 FOR COUNT
-        SEQ
-          out[1] ! buf
-          in[1] ? buf
-    TRUE
-      SEQ i = 0 FOR COUNT
-        SEQ
-          in[0] ? buf
-          out[0] ! buf
-:
-"
-    .replace("BYTES", &bytes.to_string())
-    .replace("COUNT", &n.to_string())
 }
 
 /// The best wall time of `runs` runs of `src` on `shape` with `threads` worker threads.

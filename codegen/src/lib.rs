@@ -17,6 +17,7 @@ pub mod link;
 pub mod lower;
 pub mod native;
 pub mod network;
+mod spread;
 
 use std::sync::Arc;
 

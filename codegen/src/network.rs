@@ -6,6 +6,9 @@
 //! frame and returns the `PROCESSOR` process to run; the code switches on it.
 //! [`Compiled::run_network`] builds the nodes, joins the links and runs them on a thread pool.
 //! [`Compiled::run_topology`] runs a plain node PROC once per node of a [`Shape`] instead.
+//! With a [`Transport`] (`run_network_over`, `run_topology_over`), every process (MPI rank)
+//! builds the same plan, runs the nodes its [`occ_runtime::remote::Spread`] gives it, turns the
+//! links between ranks into remote halves, and rank 0 gathers the outcome (see `crate::spread`).
 
 use std::sync::Arc;
 
@@ -16,11 +19,13 @@ use occ_compiler::types::{ChanProtocol, Prim, ProtocolItem, Type};
 use occ_grammar::ast::{Process, Span};
 use occ_runtime::abi::{Word, Wptr};
 use occ_runtime::placement::Placement;
+use occ_runtime::remote::{Spread, Transport};
 use occ_runtime::topology::{LINKS, Shape};
 use occ_runtime::{ErrorKind, HostIo, LinkStats, Network, Node, NodeConfig, RunError, Stats};
 
 use crate::Compiled;
 use crate::lower::{Res, Storage, Tr};
+use crate::spread::{self, LinkPart};
 
 /// What the code generator learnt of a configured network: per node what `rt_placement`
 /// stores, and where each link's channel word sits in the frame.
@@ -143,7 +148,8 @@ pub struct NodeOutcome {
     pub busy: std::time::Duration,
 }
 
-/// What a network run did.
+/// What a network run did. Spread over ranks, rank 0 holds the whole run's outcome and the
+/// other ranks an empty one.
 #[derive(Debug)]
 pub struct NetworkOutcome {
     /// Per node, in node order.
@@ -177,6 +183,12 @@ struct Built {
         reason = "nodes are always boxed: compiled code and links hold their addresses"
     )]
     nodes: Vec<Box<Node>>,
+    /// Which nodes run in this process, when the network is spread over several.
+    spread: Option<Spread>,
+    /// Per link made here, in the order made: its number in the plan and which part is here.
+    parts: Vec<(usize, LinkPart)>,
+    /// The plan number of the next link.
+    next_link: usize,
 }
 
 impl Built {
@@ -187,6 +199,7 @@ impl Built {
         info: &Arc<occ_runtime::ProgramInfo>,
         opts: &NetworkOptions,
         mut host: Option<HostIo>,
+        spread: Option<Spread>,
         name: impl Fn(usize) -> String,
     ) -> Built {
         let net = Network::new();
@@ -208,7 +221,19 @@ impl Built {
                 node
             })
             .collect();
-        Built { net, nodes }
+        Built {
+            net,
+            nodes,
+            spread,
+            parts: Vec::new(),
+            next_link: 0,
+        }
+    }
+
+    /// Whether node `i` runs in this process.
+    fn is_local(&self, i: usize) -> bool {
+        self.spread
+            .is_none_or(|sp| sp.is_local(i, self.nodes.len()))
     }
 
     /// The host channels of node `i`: the real ones on node 0, unconnected ones elsewhere.
@@ -226,7 +251,39 @@ impl Built {
     }
 
     /// Joins a link direction from node `w` to node `r`; returns the channel words' values.
+    /// Spread over ranks, only the ends on this rank's nodes are made (a word is 0 otherwise).
     fn connect(&mut self, w: usize, r: usize, name: &str) -> (Word, Word) {
+        let id = self.next_link;
+        self.next_link += 1;
+        if let Some(sp) = self.spread {
+            let n = self.nodes.len();
+            let (lw, lr) = (sp.is_local(w, n), sp.is_local(r, n));
+            if !(lw && lr) {
+                let mut words = (0, 0);
+                // SAFETY (both): `connect_remote` returns the address of the end's channel
+                // word, alive as long as the node.
+                if lw {
+                    let c =
+                        self.net
+                            .connect_remote(&mut self.nodes[w], true, name, id, sp.owner(r, n));
+                    words.0 = unsafe { *c };
+                    self.parts.push((id, LinkPart::Writer));
+                }
+                if lr {
+                    let c = self.net.connect_remote(
+                        &mut self.nodes[r],
+                        false,
+                        name,
+                        id,
+                        sp.owner(w, n),
+                    );
+                    words.1 = unsafe { *c };
+                    self.parts.push((id, LinkPart::Reader));
+                }
+                return words;
+            }
+        }
+        self.parts.push((id, LinkPart::Whole));
         let (a, b) = if w == r {
             let n = &mut self.nodes[w];
             let n2: *mut Node = &mut **n;
@@ -252,6 +309,7 @@ impl Built {
         mut self,
         c: &Compiled,
         threads: usize,
+        mut transport: Option<&mut dyn Transport>,
         mut frame: impl FnMut(&mut Built, usize, Wptr) -> Result<(), RunError>,
     ) -> NetworkOutcome {
         let start = std::time::Instant::now();
@@ -259,6 +317,9 @@ impl Built {
         // process, it finishes at once) so that its peers see it gone; its error is kept.
         let mut early: Vec<Option<RunError>> = (0..self.nodes.len()).map(|_| None).collect();
         for (i, failed) in early.iter_mut().enumerate() {
+            if !self.is_local(i) {
+                continue;
+            }
             let words = c.entry_words as usize + 2;
             let ws = match self.nodes[i].alloc_workspace(words) {
                 Ok(ws) => ws,
@@ -280,20 +341,52 @@ impl Built {
             // SAFETY: the frame is laid out for `c.entry` and filled.
             unsafe { self.nodes[i].spawn(ws, c.entry) };
         }
-        let done = Network::run_pool(self.nodes, threads);
-        let nodes = done
+        let local: Vec<usize> = (0..self.nodes.len())
+            .filter(|&i| self.is_local(i))
+            .collect();
+        let nodes: Vec<Box<Node>> = std::mem::take(&mut self.nodes)
             .into_iter()
-            .zip(early)
-            .map(|((node, result), failed)| NodeOutcome {
-                name: node.config().name.clone(),
-                result: failed.map_or(result, Err),
-                stats: node.stats().clone(),
-                busy: node.busy(),
+            .enumerate()
+            .filter_map(|(i, node)| local.contains(&i).then_some(node))
+            .collect();
+        let done = match transport.as_mut() {
+            Some(t) => t.run(&self.net, nodes, threads),
+            None => Network::run_pool(nodes, threads),
+        };
+        let nodes: Vec<(usize, NodeOutcome)> = done
+            .into_iter()
+            .zip(local)
+            .map(|((node, result), i)| {
+                let outcome = NodeOutcome {
+                    name: node.config().name.clone(),
+                    result: early[i].take().map_or(result, Err),
+                    stats: node.stats().clone(),
+                    busy: node.busy(),
+                };
+                (i, outcome)
             })
             .collect();
+        let links = self.net.link_stats();
+        let Some(t) = transport else {
+            return NetworkOutcome {
+                nodes: nodes.into_iter().map(|n| n.1).collect(),
+                links,
+                elapsed: start.elapsed(),
+            };
+        };
+        let parts: Vec<_> = self
+            .parts
+            .iter()
+            .zip(links)
+            .map(|(&(id, part), l)| (id, part, l))
+            .collect();
+        let (nodes, links) = t
+            .gather(spread::encode(&nodes, &parts))
+            .map(|all| spread::merge(&all))
+            .unwrap_or_default();
         NetworkOutcome {
             nodes,
-            links: self.net.link_stats(),
+            links,
             elapsed: start.elapsed(),
         }
     }
@@ -304,10 +397,27 @@ impl Compiled {
     /// PROCESSOR instance, node 0 (the lowest number) holding `host`. `None` when the program
     /// configures no network.
     pub fn run_network(&self, opts: &NetworkOptions, host: HostIo) -> Option<NetworkOutcome> {
+        self.run_network_over(opts, host, None)
+    }
+
+    /// As [`Compiled::run_network`], spread over the processes of `transport` if given (every
+    /// process calls this with the same program and options).
+    pub fn run_network_over(
+        &self,
+        opts: &NetworkOptions,
+        host: HostIo,
+        transport: Option<&mut dyn Transport>,
+    ) -> Option<NetworkOutcome> {
         let layout = self.network.as_ref()?;
-        let mut built = Built::new(layout.processors.len(), &self.info, opts, Some(host), |i| {
-            format!("PROCESSOR {}", layout.processors[i].0)
-        });
+        let spread = transport.as_deref().map(|t| t.spread());
+        let mut built = Built::new(
+            layout.processors.len(),
+            &self.info,
+            opts,
+            Some(host),
+            spread,
+            |i| format!("PROCESSOR {}", layout.processors[i].0),
+        );
         let mut stores: Vec<Placement> = layout.processors.iter().map(|p| p.1.clone()).collect();
         for (name, w, r, offset) in &layout.links {
             let (out, inp) = built.connect(*w, *r, name);
@@ -318,7 +428,7 @@ impl Compiled {
             node.set_placement(p);
         }
         let params = self.entry_params.clone();
-        Some(built.run(self, opts.threads, |b, i, ws| {
+        Some(built.run(self, opts.threads, transport, |b, i, ws| {
             let chans = b.host_channels(i);
             // SAFETY: the parameter offsets are inside the entry frame.
             unsafe {
@@ -341,9 +451,24 @@ impl Compiled {
         opts: &NetworkOptions,
         host: HostIo,
     ) -> Result<NetworkOutcome, String> {
+        self.run_topology_over(shape, opts, host, None)
+    }
+
+    /// As [`Compiled::run_topology`], spread over the processes of `transport` if given (every
+    /// process calls this with the same program, shape and options).
+    pub fn run_topology_over(
+        &self,
+        shape: Shape,
+        opts: &NetworkOptions,
+        host: HostIo,
+        transport: Option<&mut dyn Transport>,
+    ) -> Result<NetworkOutcome, String> {
         let slots = self.topology_slots()?;
         let n = shape.nodes();
-        let mut built = Built::new(n, &self.info, opts, Some(host), |i| format!("node {i}"));
+        let spread = transport.as_deref().map(|t| t.spread());
+        let mut built = Built::new(n, &self.info, opts, Some(host), spread, |i| {
+            format!("node {i}")
+        });
         // Each node's link channel words: [in 0..4, out 0..4].
         let mut words: Vec<[Word; 2 * LINKS]> = vec![[0; 2 * LINKS]; n];
         for ((a, ka), (b, kb)) in shape.directions() {
@@ -366,7 +491,7 @@ impl Compiled {
                 }
             }
         }
-        Ok(built.run(self, opts.threads, |b, i, ws| {
+        Ok(built.run(self, opts.threads, transport, |b, i, ws| {
             // The link channel words live in their own workspace on the node.
             let arr = b.nodes[i].alloc_workspace(2 * LINKS)?;
             let chans = b.host_channels(i);

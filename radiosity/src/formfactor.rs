@@ -143,7 +143,7 @@ impl SourceDensity {
         let (lo, hi) = cells
             .iter()
             .fold((f32::MAX, f32::MIN), |(a, b), &c| (a.min(c), b.max(c)));
-        if !(mean > 0.0) || (hi - lo) as f64 <= 1e-6 * mean {
+        if mean.is_nan() || mean <= 0.0 || (hi - lo) as f64 <= 1e-6 * mean {
             return None;
         }
         cells

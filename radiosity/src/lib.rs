@@ -2,7 +2,7 @@
 //! meshing with D0 discontinuities and adaptive subdivision, a flattened octree traversed with
 //! Samet's neighbour finding, Wallace ray-cast form factors with an analytic near-field extension,
 //! progressive refinement with f64 energy accounts, and the outputs (report, convergence plot,
-//! image, PLY, probes).
+//! image, PLY, probes), and an independent path tracer that is the ground truth (`pathtrace`).
 //!
 //! # Example
 //! ```
@@ -17,6 +17,7 @@
 #![deny(missing_docs)]
 
 pub mod formfactor;
+pub mod generate;
 pub mod geom;
 pub mod grid;
 pub mod intrinsics;

@@ -384,7 +384,7 @@ impl Mesh {
         let frame = Frame::of(corners, face.normal);
         let q: Vec<DVec2> = ids
             .iter()
-            .map(|&v| frame.to_2d(self.pos(v).as_dvec3()))
+            .map(|&v| frame.plane_point(self.pos(v).as_dvec3()))
             .collect();
         let min_area = tol * tol;
         let tris = if ids.len() == 3 {

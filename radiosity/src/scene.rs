@@ -524,11 +524,11 @@ fn check_mtl(
                 }
             }
             (Some("Ks"), Some(m)) => {
-                if let Ok(ks) = parse_numbers(file, line, words, 3) {
-                    if ks.iter().any(|&x| x > 0.0) {
-                        m.ks = Some([ks[0], ks[1], ks[2]].map(|x| x.clamp(0.0, 1.0)));
-                        m.why.push("specular");
-                    }
+                if let Ok(ks) = parse_numbers(file, line, words, 3)
+                    && ks.iter().any(|&x| x > 0.0)
+                {
+                    m.ks = Some([ks[0], ks[1], ks[2]].map(|x| x.clamp(0.0, 1.0)));
+                    m.why.push("specular");
                 }
             }
             (Some("Tf"), Some(m)) => {

@@ -5,7 +5,9 @@
 //! sample point to it ([`crate::kernels::shoot_batch`]), refines edges where the shot's
 //! contribution changes fast and is not linear, and books the power:
 //! - each element receives `A_e · ΔB_src · mean(F at its corners)`;
-//! - it absorbs `(1 - ρ)` of that and adds `ρ` of it to its patch's unshot power;
+//! - it absorbs `(1 - ρ)` of that and adds `ρ` of it to its own unshot power (a patch's is the
+//!   sum over its elements, and a patch shoots from where its elements hold it:
+//!   [`SourceDensity`]);
 //! - what no element received is booked as *escaped* (through openings, plus form-factor error).
 //!
 //! Accounts are kept in `f64` so that `emitted = absorbed + escaped + unshot` holds to rounding.
@@ -27,6 +29,12 @@ use crate::scene::Scene;
 /// about five elements across), so each element's share is seen.
 const DENSITY_GRID: u32 = 24;
 
+/// `Until::Error(f)` stops when the estimated error is at most `ERROR_MARGIN × f`. The estimate
+/// spreads the unshot power evenly; in a room lit only through a doorway, which gets less than
+/// its share, the true deficit came out 1.1 times the estimate (`tests/accuracy.rs`), so the rule
+/// keeps a factor of two in hand.
+pub const ERROR_MARGIN: f64 = 0.5;
+
 /// When to stop shooting.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub enum Until {
@@ -36,8 +44,8 @@ pub enum Until {
     Shots(u64),
     /// Stop after this many seconds.
     Seconds(f64),
-    /// Stop when the estimated relative error of every object's mean radiosity is at most this
-    /// (see [`Solver::estimated_errors`]).
+    /// Stop when the relative error of every object's mean radiosity is at most this: when
+    /// [`Solver::estimated_error`] is at most [`ERROR_MARGIN`] times it.
     Error(f64),
 }
 
@@ -288,7 +296,7 @@ impl<'a> Solver<'a> {
                 Until::Unshot(f) => self.unshot_fraction() <= f,
                 Until::Shots(n) => self.stats.shots >= n,
                 Until::Seconds(s) => start.elapsed().as_secs_f64() >= s,
-                Until::Error(f) => self.estimated_error() <= f,
+                Until::Error(f) => self.estimated_error() <= ERROR_MARGIN * f,
             };
             if done || self.stats.shots >= self.config.max_shots || !self.shoot_once() {
                 break;
@@ -522,7 +530,6 @@ impl<'a> Solver<'a> {
         self.element_unshot.resize(n, DVec3::ZERO);
         for (k, &t) in shrunk.iter().enumerate() {
             let (t, half) = (t as usize, before + k);
-            let old = self.element_area[t];
             let area = |i: usize| self.mesh.tri(&self.mesh.elements[i]).area() as f64;
             let (a, b) = (area(t), area(half));
             let unshot = self.element_unshot[t];
@@ -531,7 +538,6 @@ impl<'a> Solver<'a> {
             self.element_unshot[t] = unshot * (1.0 - share);
             self.element_area[t] = a;
             self.element_area[half] = b;
-            debug_assert!((a + b - old).abs() <= 1e-3 * old.max(1e-30));
         }
     }
 

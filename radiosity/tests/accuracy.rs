@@ -1,6 +1,7 @@
-//! Issue 10's causes of bias, each against an answer that does not depend on the solver: a patch
-//! shooting from its lit part only (cause 4), and a stopping rule that reaches its error target
-//! in a room lit only through a doorway (cause 5). Cause 1 is in `formfactors.rs`.
+//! Issue 10: the causes of bias, each against an answer that does not depend on the solver (a
+//! patch shooting from its lit part only, cause 4; a stopping rule that reaches its error target
+//! in a room lit only through a doorway, cause 5; cause 1 is in `formfactors.rs`), and the
+//! solver against the stored path-traced Cornell box reference.
 
 use glam::Vec3;
 use occ_radiosity::formfactor::{FormFactorConfig, SourceDensity, point_polygon};
@@ -8,8 +9,10 @@ use occ_radiosity::geom::Tri;
 use occ_radiosity::kernels::{SamplePoint, shoot_batch, shoot_batch_weighted};
 use occ_radiosity::mesh::{Mesh, MeshConfig};
 use occ_radiosity::octree::{Octree, OctreeConfig};
+use occ_radiosity::output::truth::Reference;
+use occ_radiosity::pathtrace::{PathTraceConfig, PathTracer};
 use occ_radiosity::scene::{self, Scene};
-use occ_radiosity::solver::{Solver, SolverConfig, Until};
+use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
 
 #[test]
 fn a_near_receiver_sees_only_the_lit_part_of_a_half_shadowed_patch() {
@@ -143,4 +146,103 @@ fn the_error_rule_reaches_its_target_in_a_room_lit_through_a_door() {
         "unshot 1% was expected to stop short ({name} off by {:.2}%)",
         worst * 100.0
     );
+}
+
+/// The stored path-traced reference of the Cornell box (`scenes/references/`).
+fn cornell_reference() -> Reference {
+    let text = include_str!("../../scenes/references/cornell-box.pathtrace.json");
+    Reference::parse("cornell-box.pathtrace.json", text).expect("reference")
+}
+
+#[test]
+fn the_path_tracer_reproduces_its_stored_cornell_reference() {
+    // A fresh, independent estimate (another seed, 1/128 of the paths) must agree with the stored
+    // one within 4 combined standard errors on every object and channel.
+    let reference = cornell_reference();
+    let scene = scene::cornell::load(true).expect("cornell");
+    let config = PathTraceConfig {
+        samples: reference.samples_per_object / 128,
+        seed: reference.seed + 1,
+        ..PathTraceConfig::default()
+    };
+    let fresh = PathTracer::new(&scene).object_means(&config);
+    for (o, e) in scene.objects.iter().zip(fresh) {
+        let r = reference.object(&o.name).expect("object in the reference");
+        for c in 0..3 {
+            let sigma = (r.std_err[c].powi(2) + e.std_err[c].powi(2)).sqrt();
+            assert!(
+                (e.mean[c] - r.mean_b[c]).abs() <= 4.0 * sigma,
+                "{} channel {c}: {} ± {} against {} ± {}",
+                o.name,
+                e.mean[c],
+                e.std_err[c],
+                r.mean_b[c],
+                r.std_err[c]
+            );
+        }
+    }
+}
+
+#[test]
+fn cornell_surfaces_are_within_one_percent_of_the_path_tracer_at_the_defaults() {
+    // The command's defaults (patches diagonal / 4, elements diagonal / 20, adaptive
+    // subdivision, 8 rays, error=0.01). The large surfaces and the block tops must be within 1%
+    // of the path-traced reference per channel, plus 3 of its standard errors (0.1-0.4% here).
+    // Not yet asserted: the dim block faces, which are still up to 2.2% off (see BENCHMARKS.md).
+    let reference = cornell_reference();
+    let scene = scene::cornell::load(true).expect("cornell");
+    let diag = scene.diagonal();
+    let element_size = diag / 20.0;
+    let mesh = Mesh::from_scene(
+        &scene,
+        MeshConfig {
+            patch_size: diag / 4.0,
+            element_size,
+        },
+    );
+    let config = SolverConfig {
+        form_factor: FormFactorConfig {
+            rays: 8,
+            offset: 1e-6 * diag,
+            ..FormFactorConfig::default()
+        },
+        adapt: Some(AdaptConfig {
+            difference: 0.3,
+            nonlinearity: 0.1,
+            min_edge: element_size / 8.0,
+            min_shot_power: 0.002,
+            passes: 3,
+            max_vertices: 8_000,
+        }),
+        until: Until::Error(0.01),
+        ..SolverConfig::default()
+    };
+    let mut solver = Solver::new(&scene, mesh, config);
+    solver.run(|_, _| {});
+    let large = [
+        "floor",
+        "ceiling",
+        "back_wall",
+        "green_wall",
+        "red_wall",
+        "short_block_top",
+        "tall_block_top",
+    ];
+    for (o, (_, b)) in scene.objects.iter().zip(solver.object_means()) {
+        if !large.contains(&o.name.as_str()) {
+            continue;
+        }
+        let r = reference.object(&o.name).expect("object in the reference");
+        for c in 0..3 {
+            let tolerance = 0.01 * r.mean_b[c] + 3.0 * r.std_err[c];
+            assert!(
+                (b[c] - r.mean_b[c]).abs() <= tolerance,
+                "{} channel {c}: solver {} against path-traced {} ± {}",
+                o.name,
+                b[c],
+                r.mean_b[c],
+                r.std_err[c]
+            );
+        }
+    }
 }

@@ -12,18 +12,12 @@ use occ_radiosity::pathtrace::{Estimate, PathTraceConfig, PathTracer};
 /// Asserts `|estimate - exact| <= 4σ` per channel, and that σ is below `max_rel` of the value
 /// (so that the check has teeth).
 fn assert_within(what: &str, e: &Estimate, exact: [f64; 3], max_rel: f64) {
-    for c in 0..3 {
-        let (m, s) = (e.mean[c], e.std_err[c]);
+    for ((&m, &s), &x) in e.mean.iter().zip(&e.std_err).zip(&exact) {
         assert!(
-            s <= max_rel * exact[c],
-            "{what}: standard error {s} too large for {}",
-            exact[c]
+            s <= max_rel * x,
+            "{what}: standard error {s} too large for {x}"
         );
-        assert!(
-            (m - exact[c]).abs() <= 4.0 * s,
-            "{what}: {m} ± {s}, exact {}",
-            exact[c]
-        );
+        assert!((m - x).abs() <= 4.0 * s, "{what}: {m} ± {s}, exact {x}");
     }
 }
 

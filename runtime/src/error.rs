@@ -153,6 +153,10 @@ pub enum RunError {
     /// Occurs when host output cannot be written or flushed.
     #[error("host I/O: {0}")]
     HostIo(#[from] std::io::Error),
+    /// The error of a node that ran in another process (an MPI rank), as that process
+    /// reported it.
+    #[error("{0}")]
+    Remote(String),
 }
 
 impl Node {

@@ -36,6 +36,8 @@ pub struct HostIo {
     error: BufWriter<Box<dyn Write + Send>>,
     /// Flush the screen at each newline (a terminal).
     line_flush: bool,
+    /// Whether [`FLUSH`] bytes are written as they are (a host protocol of binary data).
+    binary: bool,
 }
 
 impl std::fmt::Debug for HostIo {
@@ -56,6 +58,16 @@ impl HostIo {
             screen: BufWriter::with_capacity(1 << 16, screen),
             error: BufWriter::new(error),
             line_flush: false,
+            binary: false,
+        }
+    }
+
+    /// The same streams for a program that speaks a binary protocol with its host: every byte
+    /// sent to `screen` or `error` is written, [`FLUSH`] too.
+    pub fn binary(self) -> HostIo {
+        HostIo {
+            binary: true,
+            ..self
         }
     }
 
@@ -76,13 +88,20 @@ impl HostIo {
     }
 
     /// Writes `bytes` to `stream`; a [`FLUSH`] byte is not written but flushes the stream (as
-    /// KRoC's screen process does for the course library's `flush`). Error output is flushed at
-    /// once.
+    /// KRoC's screen process does for the course library's `flush`), unless the host is
+    /// [`HostIo::binary`]. Error output is flushed at once.
     pub(crate) fn write(&mut self, stream: HostStream, bytes: &[u8]) -> std::io::Result<()> {
         let w = match stream {
             HostStream::Screen => &mut self.screen,
             HostStream::Error => &mut self.error,
         };
+        if self.binary {
+            w.write_all(bytes)?;
+            if stream == HostStream::Error {
+                w.flush()?;
+            }
+            return Ok(());
+        }
         let mut parts = bytes.split(|&b| b == FLUSH).peekable();
         let by_line = self.line_flush && stream == HostStream::Screen;
         while let Some(part) = parts.next() {
@@ -176,5 +195,14 @@ mod test {
         assert!(screen.0.lock().unwrap().is_empty());
         io.write(HostStream::Screen, &[b'x', FLUSH]).unwrap();
         assert_eq!(*screen.0.lock().unwrap(), b"one\nx");
+    }
+
+    #[test]
+    fn a_binary_host_gets_flush_bytes_as_they_are() {
+        let screen = Shared::default();
+        let mut io = host(&screen, false).binary();
+        io.write(HostStream::Screen, &[1, FLUSH, 2]).unwrap();
+        io.flush().unwrap();
+        assert_eq!(*screen.0.lock().unwrap(), [1, FLUSH, 2]);
     }
 }

@@ -46,19 +46,21 @@ pub(crate) struct NetState {
     stopped: AtomicBool,
     /// Every link direction, in the order connected, for statistics.
     links: Mutex<Vec<Arc<LinkShared>>>,
+    /// The local halves of links to nodes in other processes (see [`crate::remote`]).
+    pub(crate) remote: Mutex<Vec<crate::remote::Half>>,
 }
 
 /// One idle node in [`NetState::state`].
 const IDLE: u64 = 1;
 /// One mail in flight in [`NetState::state`].
-const MAIL: u64 = 1 << 32;
+pub(crate) const MAIL: u64 = 1 << 32;
 
 impl NetState {
-    fn add(&self, v: u64) {
+    pub(crate) fn add(&self, v: u64) {
         self.state.fetch_add(v, SeqCst);
     }
 
-    fn sub(&self, v: u64) {
+    pub(crate) fn sub(&self, v: u64) {
         self.state.fetch_sub(v, SeqCst);
     }
 
@@ -82,26 +84,26 @@ impl NetState {
 /// A set of nodes joined by links.
 #[derive(Debug, Clone, Default)]
 pub struct Network {
-    state: Arc<NetState>,
+    pub(crate) state: Arc<NetState>,
 }
 
 /// One party registered at a link.
 #[derive(Debug)]
-struct Party {
-    desc: Word,
-    data: usize,
-    len: Word,
-    mailbox: Arc<Mailbox>,
+pub(crate) struct Party {
+    pub(crate) desc: Word,
+    pub(crate) data: usize,
+    pub(crate) len: Word,
+    pub(crate) mailbox: Arc<Mailbox>,
     /// When it blocked, for [`LinkStats`].
-    since: Instant,
+    pub(crate) since: Instant,
 }
 
 #[derive(Debug, Default)]
-struct LinkState {
-    writer: Option<Party>,
-    reader: Option<Party>,
-    alt: Option<(Word, Arc<Mailbox>)>,
-    stats: LinkStats,
+pub(crate) struct LinkState {
+    pub(crate) writer: Option<Party>,
+    pub(crate) reader: Option<Party>,
+    pub(crate) alt: Option<(Word, Arc<Mailbox>)>,
+    pub(crate) stats: LinkStats,
 }
 
 /// Traffic of one link direction.
@@ -133,7 +135,7 @@ pub(crate) struct LinkEnd {
 }
 
 impl LinkEnd {
-    fn lock(&self) -> MutexGuard<'_, LinkState> {
+    pub(crate) fn lock(&self) -> MutexGuard<'_, LinkState> {
         self.shared.state.lock().unwrap_or_else(|p| p.into_inner())
     }
 
@@ -156,7 +158,7 @@ impl LinkEnd {
         }
     }
 
-    fn post(&self, to: &Mailbox, desc: Word) {
+    pub(crate) fn post(&self, to: &Mailbox, desc: Word) {
         self.shared.net.add(MAIL);
         to.post(desc);
     }
@@ -177,6 +179,16 @@ impl Network {
     /// Creates a link direction from `from` to `to` (both joined): returns the channel word on
     /// `from` to output to, and the one on `to` to input from.
     pub fn connect(&self, from: &mut Node, to: &mut Node, name: &str) -> (*mut Word, *mut Word) {
+        let out = self.link(name);
+        let inp = out.clone();
+        (
+            from.add_external(Engine::LinkOut(out), &format!("{name} (link out)")),
+            to.add_external(Engine::LinkIn(inp), &format!("{name} (link in)")),
+        )
+    }
+
+    /// A new link direction, listed for statistics, with no end yet.
+    pub(crate) fn link(&self, name: &str) -> LinkEnd {
         let shared = Arc::new(LinkShared {
             state: Mutex::new(LinkState {
                 stats: LinkStats {
@@ -188,19 +200,12 @@ impl Network {
             net: self.state.clone(),
         });
         lock(&self.state.links).push(shared.clone());
-        let out = LinkEnd {
-            shared: shared.clone(),
-        };
-        let inp = LinkEnd { shared };
-        (
-            from.add_external(Engine::LinkOut(out), &format!("{name} (link out)")),
-            to.add_external(Engine::LinkIn(inp), &format!("{name} (link in)")),
-        )
+        LinkEnd { shared }
     }
 }
 
 /// Locks `m`, whatever a panicking holder left.
-fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+pub(crate) fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 

@@ -6,6 +6,11 @@
 //! timer makes it ready when due. When no node is ready or running and no parked node has a
 //! timer, no link can move: every parked node reports a deadlock.
 //!
+//! A network that spans several processes ([`Network::run_pool_driven`]) cannot judge deadlock
+//! alone: a parked node may yet get mail from a link to another process. Its workers wait instead
+//! until the driver, which runs on the calling thread and talks to the other processes, settles
+//! the run (every process quiescent, nothing in flight) or stops it (a node elsewhere halted).
+//!
 //! Lost wake-ups cannot happen: a worker parks a node only under the pool lock after checking its
 //! mailbox, and a poster pushes the mail before calling the waker, which takes the same lock.
 
@@ -35,6 +40,8 @@ struct PoolState {
     slots: Vec<Slot>,
     ready: VecDeque<usize>,
     running: usize,
+    /// A driven pool's nodes can no longer get mail from elsewhere: parked nodes are deadlocked.
+    settled: bool,
 }
 
 /// Timeslices a node runs on a pool thread before it gives way to another ready node.
@@ -47,6 +54,8 @@ pub(crate) struct PoolShared {
     /// Each node's yield flag (nodes are boxed, so the addresses are stable): set on all of them
     /// when a node halts, so that running nodes reach a timeslice and stop.
     flags: Vec<usize>,
+    /// Whether a driver decides when parked nodes are deadlocked (see the module doc).
+    driven: bool,
 }
 
 impl PoolShared {
@@ -66,6 +75,49 @@ impl PoolShared {
             self.work.notify_one();
         }
     }
+
+    /// Makes every running node reach a timeslice (the network has stopped).
+    fn yield_all(&self) {
+        for &f in &self.flags {
+            // SAFETY: every node of the pool is alive (boxed, owned by a slot or a worker)
+            // until `run_pool` returns.
+            unsafe { (*(f as *const AtomicU32)).store(1, Ordering::Relaxed) };
+        }
+    }
+}
+
+/// What the driver of a pool (see [`Network::run_pool_driven`]) sees of it.
+pub struct PoolView<'a> {
+    pool: &'a PoolShared,
+}
+
+impl PoolView<'_> {
+    /// Whether no node is ready or running and no parked node waits for a timer: until mail
+    /// arrives from the driver, no node of this pool will run again.
+    pub fn quiescent(&self) -> bool {
+        let st = self.pool.lock();
+        st.running == 0 && st.ready.is_empty() && earliest_due(&st).is_none()
+    }
+
+    /// Whether every node has stopped.
+    pub fn all_done(&self) -> bool {
+        all_done(&self.pool.lock())
+    }
+
+    /// No mail will come from elsewhere any more: parked nodes report deadlock and the workers
+    /// return.
+    pub fn settle(&self) {
+        self.pool.lock().settled = true;
+        self.pool.work.notify_all();
+    }
+
+    /// A node elsewhere halted: `net` (this pool's network) stops, and so does every node.
+    pub fn stop(&self, net: &Network) {
+        net.stop();
+        self.pool.yield_all();
+        stop_parked(&mut self.pool.lock());
+        self.pool.work.notify_all();
+    }
 }
 
 /// The waker a mailbox calls: the pool and the node's index.
@@ -81,18 +133,39 @@ impl Network {
         nodes: Vec<Box<Node>>,
         threads: usize,
     ) -> Vec<(Box<Node>, Result<(), RunError>)> {
+        Self::pool(nodes, threads, None::<fn(PoolView<'_>)>)
+    }
+
+    /// As [`Network::run_pool`] for the nodes of a network that spans several processes:
+    /// `drive` runs on the calling thread meanwhile and must return only after it has settled
+    /// or stopped the pool (see [`PoolView`]).
+    pub fn run_pool_driven(
+        nodes: Vec<Box<Node>>,
+        threads: usize,
+        drive: impl FnOnce(PoolView<'_>),
+    ) -> Vec<(Box<Node>, Result<(), RunError>)> {
+        Self::pool(nodes, threads, Some(drive))
+    }
+
+    fn pool(
+        nodes: Vec<Box<Node>>,
+        threads: usize,
+        drive: Option<impl FnOnce(PoolView<'_>)>,
+    ) -> Vec<(Box<Node>, Result<(), RunError>)> {
         let n = nodes.len();
         let pool = Arc::new(PoolShared {
             state: Mutex::new(PoolState {
                 slots: Vec::with_capacity(n),
                 ready: (0..n).collect(),
                 running: 0,
+                settled: false,
             }),
             work: Condvar::new(),
             flags: nodes
                 .iter()
                 .map(|n| n.yield_flag.as_ptr() as usize)
                 .collect(),
+            driven: drive.is_some(),
         });
         let mut tickets = Vec::new();
         {
@@ -113,6 +186,9 @@ impl Network {
         std::thread::scope(|s| {
             for _ in 0..threads.max(1) {
                 s.spawn(|| worker(&pool));
+            }
+            if let Some(drive) = drive {
+                drive(PoolView { pool: &pool });
             }
         });
         drop(tickets);
@@ -153,11 +229,7 @@ fn worker(pool: &PoolShared) {
                 && h.kind != Some(crate::ErrorKind::Stopped)
             {
                 node.stop_network();
-                for &f in &pool.flags {
-                    // SAFETY: every node of the pool is alive (boxed, owned by a slot or a
-                    // worker) until `run_pool` returns.
-                    unsafe { (*(f as *const AtomicU32)).store(1, Ordering::Relaxed) };
-                }
+                pool.yield_all();
             }
             st = pool.lock();
             st.running -= 1;
@@ -171,6 +243,9 @@ fn worker(pool: &PoolShared) {
         if st.running == 0 {
             let next_due = earliest_due(&st);
             match next_due {
+                None if pool.driven && !st.settled => {
+                    st = wait_for(pool, st, Duration::from_millis(50));
+                }
                 None => {
                     report_deadlocks(&mut st);
                     pool.work.notify_all();

@@ -76,6 +76,8 @@ def main():
     ap.add_argument("scene")
     ap.add_argument("--spp", type=int, default=1 << 16, help="samples per object per run")
     ap.add_argument("--runs", type=int, default=8)
+    ap.add_argument("--max-depth", type=int, default=-1,
+                    help="path length limit (1: direct light only; -1: none)")
     args = ap.parse_args()
     mi.set_variant("scalar_rgb")
     objects, mtllib = parse(args.scene)
@@ -93,7 +95,7 @@ def main():
         files.append(path)
 
     def scene_dict(measured):
-        d = {"type": "scene", "integrator": {"type": "path", "max_depth": -1, "rr_depth": 5}}
+        d = {"type": "scene", "integrator": {"type": "path", "max_depth": args.max_depth, "rr_depth": 5}}
         for i, (name, (mat, tris)) in enumerate(objects):
             m = mats[mat]
             shape = {

@@ -1,6 +1,8 @@
 //! `occ radiosity`: reads the scene (or takes the embedded Cornell box), runs the reference
-//! solver and writes its outputs (report, convergence, image, mesh; see the README) into `--out`. All the work is in
-//! `occ-radiosity`; this module only parses flags, reads and writes files and shows progress.
+//! solver or carm.occ (`--solver carm`, [`super::carm`]) and writes its outputs (report,
+//! convergence, image, mesh; see the README) into `--out`. All the radiosity is in
+//! `occ-radiosity` or carm.occ; this module only parses flags, reads and writes files and shows
+//! progress.
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -15,11 +17,15 @@ use occ_radiosity::pathtrace::{PathTraceConfig, PathTracer};
 use occ_radiosity::scene::{self, Scene};
 use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
 
+use super::carm;
+
 /// Which solver to run.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum SolverKind {
     /// The sequential Rust reference solver.
     Reference,
+    /// programs/carm.occ on a ternary tree of `--nodes` simulated transputers.
+    Carm,
 }
 
 /// Flags of `occ radiosity`.
@@ -30,8 +36,9 @@ pub struct Args {
     /// Output folder (created if missing).
     #[arg(long, default_value = "radiosity-out")]
     pub out: PathBuf,
-    /// Stopping rule: unshot=FRACTION, shots=N or time=SECONDS.
-    #[arg(long, default_value = "unshot=0.01")]
+    /// Stopping rule: error=FRACTION (every object's mean B within it, by the solver's
+    /// estimate), unshot=FRACTION (of the emitted power), shots=N or time=SECONDS.
+    #[arg(long, default_value = "error=0.01")]
     pub until: Until,
     /// A report.json to measure the RMS error against (matched by object name).
     #[arg(long)]
@@ -45,6 +52,12 @@ pub struct Args {
     /// Solver.
     #[arg(long, value_enum, default_value = "reference")]
     pub solver: SolverKind,
+    /// Nodes of the ternary tree carm.occ runs on (`--solver carm`).
+    #[arg(long, default_value_t = 13)]
+    pub nodes: usize,
+    /// OS threads running carm.occ's nodes (default: one per core); 1 repeats runs exactly.
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Longest patch (shooter) edge; default: scene diagonal / 4.
     #[arg(long)]
     pub patch_size: Option<f32>,
@@ -96,6 +109,9 @@ pub struct Args {
     /// Path tracer: paths per object and per probe (the standard error falls as 1/sqrt).
     #[arg(long, default_value_t = 65_536)]
     pub pt_samples: u64,
+    /// Path tracer: most bounces a path makes (1: direct light only).
+    #[arg(long, default_value_t = 1000)]
+    pub pt_max_bounces: u32,
 }
 
 /// Runs `occ radiosity`.
@@ -191,8 +207,30 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         );
     }
     let t3 = Instant::now();
-    progress.stage("shooting", &format!("until {:?}", args.until));
-    solve(&mut solver, &progress);
+    let network = match args.solver {
+        SolverKind::Reference => {
+            progress.stage("shooting", &format!("until {:?}", args.until));
+            solve(&mut solver, &progress);
+            None
+        }
+        SolverKind::Carm => {
+            let threads = args.threads.unwrap_or_else(|| {
+                std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+            });
+            progress.stage(
+                "shooting",
+                &format!(
+                    "carm.occ on {} nodes, {threads} threads, until {:?}",
+                    args.nodes, args.until
+                ),
+            );
+            let settings = carm::CarmSettings {
+                nodes: args.nodes,
+                threads,
+            };
+            Some(carm::solve(&mut solver, settings)?)
+        }
+    };
     let timings = report::Timings {
         load,
         mesh: mesh_time,
@@ -206,6 +244,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         timings,
         probes.as_deref(),
         truth.as_ref(),
+        network.as_ref(),
     )?;
     Ok(ExitCode::SUCCESS)
 }
@@ -313,14 +352,18 @@ fn path_trace(
     let config = PathTraceConfig {
         samples: args.pt_samples,
         seed: args.seed,
-        ..PathTraceConfig::default()
+        max_bounces: args.pt_max_bounces,
     };
     let start = Instant::now();
     let tracer = PathTracer::new(scene);
     let means = tracer.object_means(&config);
     let at_probes = tracer.probes(probes, &config);
     let seconds = start.elapsed().as_secs_f64();
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    // The program's own path says nothing about the run; the arguments do.
+    let command = std::iter::once("occ".to_string())
+        .chain(std::env::args().skip(1))
+        .collect::<Vec<_>>()
+        .join(" ");
     let pairs: Vec<_> = probes.iter().copied().zip(at_probes).collect();
     let reference =
         truth::Reference::new((name, scene), &command, &config, seconds, &means, &pairs);
@@ -367,6 +410,18 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
         args.image_size >= 8 && args.image_size <= 8192,
         "--image-size must be between 8 and 8192"
     );
+    anyhow::ensure!(args.nodes >= 1, "--nodes must be at least 1");
+    if let SolverKind::Carm = args.solver {
+        anyhow::ensure!(
+            args.no_adapt,
+            "--solver carm does not subdivide yet: give --no-adapt"
+        );
+        anyhow::ensure!(
+            matches!(args.until, Until::Unshot(_) | Until::Shots(_)),
+            "--solver carm takes --until unshot=F or shots=N"
+        );
+    }
+    anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
     for (flag, v) in [
         ("--patch-size", args.patch_size),
         ("--element-size", args.element_size),
@@ -460,6 +515,7 @@ fn write_outputs(
     timings: report::Timings,
     probes: Option<&[probe::Probe]>,
     truth: Option<&truth::Reference>,
+    network: Option<&carm::CarmReport>,
 ) -> anyhow::Result<()> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
@@ -480,9 +536,16 @@ fn write_outputs(
         print!("{}", truth::error_table(&errors));
         rep.truth = Some(errors);
     }
+    // carm.occ's report: the same, with its nodes' and links' counters.
+    let mut json = serde_json::to_value(&rep)?;
+    if let Some(net) = network {
+        json["solver"] = "carm".into();
+        json["nodes"] = serde_json::to_value(&net.nodes)?;
+        json["links"] = serde_json::to_value(&net.links)?;
+    }
     write(
         "report.json",
-        serde_json::to_string_pretty(&rep)?.as_bytes(),
+        serde_json::to_string_pretty(&json)?.as_bytes(),
     )?;
     write(
         "convergence.csv",

@@ -1,5 +1,5 @@
 //! `occ run FILE.occ [-I DIR] [--stats] [--topology SHAPE | --nodes N] [--threads T]
-//! [--node-memory BYTES] [--link-speed RATE]`: preprocess, parse, check, compile with Cranelift
+//! [--node-memory BYTES] [--link-speed RATE] [--transport inproc|mpi]`: preprocess, parse, check, compile with Cranelift
 //! and run.
 //!
 //! - A program whose last PROC takes the host's byte channels runs on one node, keyboard, screen
@@ -8,6 +8,9 @@
 //!   PROCESSOR, the lowest-numbered holding the host's channels.
 //! - With `--topology` (or `--nodes N`, a ternary tree), the last PROC is a node program
 //!   `(VAL INT id, nodes, []CHAN OF P in?, out!, ...)` run once per node of the shape.
+//!
+//! - With `--transport mpi` under `mpirun`, a network's nodes are spread over the ranks (see
+//!   [`super::transport`]); rank 0 prints.
 //!
 //! Exit status: 0 when the program terminates, 1 on compile errors, a runtime error, STOP or
 //! deadlock (with a message naming node, file, line and kind, or the deadlock report per node).
@@ -54,6 +57,10 @@ pub struct Args {
     /// (e.g. 20Mbit, 10Mbit): 11-bit data packets per byte.
     #[arg(long, value_name = "RATE", value_parser = parse_rate)]
     pub link_speed: Option<f64>,
+    /// Where a network's nodes run: inproc (this process) or mpi (the ranks of mpirun; needs a
+    /// build with --features mpi).
+    #[arg(long, value_enum, default_value_t)]
+    pub transport: super::transport::Kind,
 }
 
 /// Runs `occ run`.
@@ -61,8 +68,10 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     let options = Options {
         include_dirs: args.include.clone(),
     };
+    let mut transport = super::transport::Chosen::new(args.transport)?;
+    let reports = transport.reports();
     let (front, checked) = frontend::load(&args.file, &options);
-    for diag in &checked.diagnostics {
+    for diag in checked.diagnostics.iter().filter(|_| reports) {
         eprintln!("{:?}", diag.report);
     }
     let Some(front) = front else {
@@ -73,7 +82,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     let compiled = match occ_codegen::compile_with(program, &front.checked, map, &set) {
         Ok(compiled) => compiled,
         Err(error) => {
-            for d in error.diagnostics() {
+            for d in error.diagnostics().iter().filter(|_| reports) {
                 eprintln!("{:?}", d.to_report(map));
             }
             return Ok(ExitCode::from(1));
@@ -105,17 +114,21 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                 args.file.display()
             );
         }
-        match compiled.run_topology(shape, &opts, HostIo::stdio()) {
+        match compiled.run_topology_over(shape, &opts, HostIo::stdio(), transport.transport()) {
             Ok(o) => o,
             Err(why) => anyhow::bail!("{why}"),
         }
-    } else if let Some(o) = compiled.run_network(&opts, HostIo::stdio()) {
+    } else if let Some(o) = compiled.run_network_over(&opts, HostIo::stdio(), transport.transport())
+    {
         o
     } else if compiled.is_node_program() {
         anyhow::bail!(
             "PROC {} is a node program: give --topology SHAPE (tree3:N, pipeline:N, ring:N, grid:WxH, hypercube:D) or --nodes N",
             compiled.entry_name
         );
+    } else if !reports {
+        // A program that is not a network runs on rank 0 alone.
+        return Ok(ExitCode::SUCCESS);
     } else {
         let (result, stats) = compiled.run(opts.node, HostIo::stdio());
         if args.stats {
@@ -123,6 +136,9 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         }
         return Ok(report_one(result));
     };
+    if !reports {
+        return Ok(ExitCode::SUCCESS);
+    }
     if args.stats {
         eprint!("{}", network_stats(&outcome, args.link_speed));
     }

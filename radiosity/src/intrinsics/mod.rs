@@ -47,6 +47,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: source_samples_into as *const u8,
     },
     Intrinsic {
+        name: "RAD.SOURCE.SAMPLES.AT",
+        params: &[ValReal32s, ValInt, ValInt, ValInt, VarReal32s, ResultInt],
+        result: None,
+        addr: source_samples_at as *const u8,
+    },
+    Intrinsic {
         name: "RAD.FORM.FACTOR",
         params: &[
             ValReal32s,
@@ -66,6 +72,14 @@ pub static INTRINSICS: &[Intrinsic] = &[
         ],
         result: None,
         addr: shadow_rays as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.SHADOW.RAYS.LIFTED",
+        params: &[
+            ValReal32s, ValReal32s, ValReal32s, ValReal32s, ValReal32, VarReal32s, ResultInt,
+        ],
+        result: None,
+        addr: shadow_rays_lifted as *const u8,
     },
     Intrinsic {
         name: "RAD.SHOOT.BATCH",
@@ -173,11 +187,45 @@ pub unsafe extern "C" fn source_samples_into(
     out_len: Word,
     count: *mut Word,
 ) {
+    // SAFETY: the caller's contract is this one's.
+    unsafe { source_samples_at(tri, tri_len, m, seed, 0, out, out_len, count) }
+}
+
+/// Most sets `RAD.SOURCE.SAMPLES.AT` skips.
+pub const MAX_SKIPPED_SETS: Word = 1 << 16;
+
+/// `PROC RAD.SOURCE.SAMPLES.AT (VAL []REAL32 tri, VAL INT m, VAL INT seed, VAL INT set,
+/// []REAL32 out, RESULT INT count)`: `RAD.SOURCE.SAMPLES` for the `set`-th set of samples the
+/// generator seeded with `seed` draws (set 0 is `RAD.SOURCE.SAMPLES`'s). The Rust solver draws
+/// one set per receiver from one generator per batch of receivers, so a node that holds a
+/// receiver without its batch-mates takes its samples with this. `count` is -1 (and `out`
+/// untouched) as for `RAD.SOURCE.SAMPLES`, and when `set` is not in 0..=65536.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn source_samples_at(
+    tri: *const f32,
+    tri_len: Word,
+    m: Word,
+    seed: Word,
+    set: Word,
+    out: *mut f32,
+    out_len: Word,
+    count: *mut Word,
+) {
     // SAFETY: the ABI passes a valid array.
     let tri = triangle(unsafe { array(tri, tri_len) });
     let mut samples = Vec::new();
-    if let Some(tri) = tri.filter(|_| (1..=MAX_SAMPLES).contains(&m)) {
+    let valid = (1..=MAX_SAMPLES).contains(&m) && (0..=MAX_SKIPPED_SETS).contains(&set);
+    if let Some(tri) = tri.filter(|_| valid) {
         let mut rng = Pcg32::new(seed as u64, SAMPLE_STREAM);
+        // Each set draws two numbers per sample of a k x k grid (`source_samples`).
+        let k = (m as f32).sqrt().ceil() as u64;
+        rng.advance(set as u64 * 2 * k * k);
         source_samples(&tri, m as u32, &mut rng, &mut samples);
     }
     let floats = 3 * samples.len();
@@ -270,6 +318,53 @@ pub unsafe extern "C" fn shadow_rays(
     rays_len: Word,
     count: *mut Word,
 ) {
+    let offset = FormFactorConfig::default().offset;
+    // SAFETY: the caller's contract is this one's.
+    unsafe {
+        shadow_rays_lifted(
+            p,
+            p_len,
+            n,
+            n_len,
+            tri,
+            tri_len,
+            samples,
+            samples_len,
+            offset,
+            rays,
+            rays_len,
+            count,
+        )
+    }
+}
+
+/// `PROC RAD.SHADOW.RAYS.LIFTED (VAL []REAL32 point, normal, VAL []REAL32 tri,
+/// VAL []REAL32 samples, VAL REAL32 offset, []REAL32 rays, RESULT INT count)`:
+/// `RAD.SHADOW.RAYS` with the ray origins lifted by `offset` along the normal, and the rays
+/// stopping that far short of the source, instead of the default 1e-3 (the Rust solver takes
+/// a millionth of the scene's diagonal). `count` is -1 as for `RAD.SHADOW.RAYS`, and when
+/// `offset` is negative or not finite.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn shadow_rays_lifted(
+    p: *const f32,
+    p_len: Word,
+    n: *const f32,
+    n_len: Word,
+    tri: *const f32,
+    tri_len: Word,
+    samples: *const f32,
+    samples_len: Word,
+    offset: f32,
+    rays: *mut f32,
+    rays_len: Word,
+    count: *mut Word,
+) {
     // SAFETY: the ABI passes valid arrays.
     let (p, n, tri, samples) = unsafe {
         (
@@ -281,11 +376,18 @@ pub unsafe extern "C" fn shadow_rays(
     };
     let written = match (p, n, tri, samples) {
         (Some(p), Some(n), Some(tri), Some(s))
-            if !s.is_empty() && (RAY_FLOATS * s.len()) as Word <= rays_len =>
+            if !s.is_empty()
+                && (RAY_FLOATS * s.len()) as Word <= rays_len
+                && offset.is_finite()
+                && offset >= 0.0 =>
         {
             // SAFETY: `rays` is valid for `rays_len` >= 8m floats.
             let out = unsafe { std::slice::from_raw_parts_mut(rays, RAY_FLOATS * s.len()) };
-            receiver_rays(p, n, &tri, &s, out)
+            let config = FormFactorConfig {
+                offset,
+                ..FormFactorConfig::default()
+            };
+            receiver_rays(p, n, &tri, &s, &config, out)
         }
         _ => -1,
     };
@@ -302,14 +404,20 @@ fn visible_form_factor(p: Vec3, n: Vec3, tri: &Tri, samples: &[Vec3], visible: &
 
 /// Writes one receiver's shadow rays into `out` (`RAY_FLOATS` per sample, empty rays where none
 /// is cast) and returns how many are cast.
-fn receiver_rays(p: Vec3, n: Vec3, tri: &Tri, samples: &[Vec3], out: &mut [f32]) -> Word {
+fn receiver_rays(
+    p: Vec3,
+    n: Vec3,
+    tri: &Tri,
+    samples: &[Vec3],
+    config: &FormFactorConfig,
+    out: &mut [f32],
+) -> Word {
     for (ray, x) in out.chunks_exact_mut(RAY_FLOATS).zip(samples) {
         ray.fill(0.0);
         ray[..3].copy_from_slice(&x.to_array());
     }
     let mut cast = 0;
-    let config = FormFactorConfig::default();
-    form_factor_with(p, n, tri, samples, &config, |k, origin, dir, tmax| {
+    form_factor_with(p, n, tri, samples, config, |k, origin, dir, tmax| {
         if let Some(ray) = out.get_mut(RAY_FLOATS * k..RAY_FLOATS * (k + 1)) {
             ray[..3].copy_from_slice(&origin.to_array());
             ray[3..6].copy_from_slice(&dir.to_array());
@@ -431,7 +539,8 @@ pub unsafe extern "C" fn shadow_rays_batch(
             // SAFETY: `rays` is valid for `rays_len` >= 8·r·m floats.
             let out = unsafe { std::slice::from_raw_parts_mut(rays, per * rs.len()) };
             let each = rs.iter().zip(out.chunks_exact_mut(per));
-            each.map(|(&(p, n), o)| receiver_rays(p, n, &tri, &s, o))
+            let config = FormFactorConfig::default();
+            each.map(|(&(p, n), o)| receiver_rays(p, n, &tri, &s, &config, o))
                 .sum()
         }
         _ => -1,

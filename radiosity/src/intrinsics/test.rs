@@ -100,6 +100,54 @@ fn samples_are_the_solvers_and_bad_lengths_write_nothing() {
     assert!(short.iter().all(|x| *x == 9.0));
 }
 
+type SamplesAt =
+    unsafe extern "C" fn(*const f32, Word, Word, Word, Word, *mut f32, Word, *mut Word);
+
+fn samples_at(tri: &[f32], m: Word, seed: Word, set: Word, out: &mut [f32]) -> Word {
+    let e = entry("RAD.SOURCE.SAMPLES.AT");
+    // SAFETY: the table says this is the signature.
+    let f: SamplesAt = unsafe { std::mem::transmute(e.addr) };
+    let mut count = 0;
+    // SAFETY: valid slices and result.
+    unsafe {
+        f(
+            tri.as_ptr(),
+            tri.len() as Word,
+            m,
+            seed,
+            set,
+            out.as_mut_ptr(),
+            out.len() as Word,
+            &mut count,
+        )
+    };
+    count
+}
+
+#[test]
+fn samples_at_a_set_are_the_solvers_for_that_receiver_of_a_batch() {
+    // The solver's batch draws receiver after receiver from one generator: set k is the k-th.
+    let seed = (1u64 << 40 | 12345) as Word;
+    let mut rng = Pcg32::new(seed as u64, SAMPLE_STREAM);
+    let mut want = Vec::new();
+    for set in 0..5 {
+        source_samples(&triangle(&TRI).expect("tri"), 8, &mut rng, &mut want);
+        let mut out = [9.0f32; 3 * 9];
+        assert_eq!(samples_at(&TRI, 8, seed, set, &mut out), 9);
+        assert_eq!(points(&out).expect("points"), want, "set {set}");
+    }
+    let mut first = [0.0f32; 3 * 9];
+    let mut plain = [0.0f32; 3 * 9];
+    samples_at(&TRI, 8, 3, 0, &mut first);
+    samples(&TRI, 8, 3, &mut plain);
+    assert_eq!(first, plain);
+    let mut out = [9.0f32; 3 * 9];
+    assert_eq!(samples_at(&TRI, 8, 3, -1, &mut out), -1);
+    assert_eq!(samples_at(&TRI, 8, 3, MAX_SKIPPED_SETS + 1, &mut out), -1);
+    assert_eq!(samples_at(&TRI, 8, 3, 1, &mut out[..26]), -1);
+    assert!(out.iter().all(|x| *x == 9.0));
+}
+
 /// A source triangle at height 1 facing down (-y), towards the receivers below.
 const SOURCE: [f32; 9] = [0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0];
 

@@ -98,7 +98,7 @@ impl Context<'_> {
             let h = w.map(|p| frame.height(p));
             if face.normal.dot(other.normal).abs() > PARALLEL {
                 if h.iter().all(|&x| x > self.tol && x <= self.gap) {
-                    covers.push(w.map(|p| frame.to_2d(p)));
+                    covers.push(w.map(|p| frame.plane_point(p)));
                     self.outline(g, &frame, &mut cuts);
                 }
                 continue;

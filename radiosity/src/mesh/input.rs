@@ -139,10 +139,11 @@ fn count_edges(faces: &[Face], counts: &mut InputCounts) {
     for around in edges.values() {
         if around.len() > 2 {
             counts.non_manifold_edges += 1;
-        } else if let [(f, d), (g, e)] = around[..] {
-            if d == e && faces[f as usize].object == faces[g as usize].object {
-                counts.flipped_edges += 1;
-            }
+        } else if let [(f, d), (g, e)] = around[..]
+            && d == e
+            && faces[f as usize].object == faces[g as usize].object
+        {
+            counts.flipped_edges += 1;
         }
     }
 }

@@ -70,7 +70,7 @@ impl Frame {
     }
 
     /// `p` (projected onto the plane) in frame coordinates.
-    pub fn to_2d(&self, p: DVec3) -> DVec2 {
+    pub fn plane_point(&self, p: DVec3) -> DVec2 {
         let r = p - self.o;
         DVec2::new(r.dot(self.u), r.dot(self.w))
     }
@@ -83,7 +83,7 @@ impl Frame {
     /// The point of the plane under `p`.
     pub fn project(&self, p: DVec3) -> Pt {
         Pt {
-            q: self.to_2d(p),
+            q: self.plane_point(p),
             p: p - self.n * self.height(p),
         }
     }
@@ -105,7 +105,7 @@ pub fn whole(v: [DVec3; 3], frame: &Frame) -> Piece {
     Piece {
         pts: v
             .map(|p| Pt {
-                q: frame.to_2d(p),
+                q: frame.plane_point(p),
                 p,
             })
             .to_vec(),

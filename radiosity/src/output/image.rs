@@ -75,10 +75,10 @@ pub fn default_camera(scene: &Scene) -> Camera {
             .map(|&d| view(centre + d * distance, fov))
             .collect(),
     );
-    if let Some((score, cam)) = from_outside {
-        if score >= (PIXELS / 3) as i64 {
-            return cam;
-        }
+    if let Some((score, cam)) = from_outside
+        && score >= (PIXELS / 3) as i64
+    {
+        return cam;
     }
     let inside = (0..8)
         .map(|corner| {

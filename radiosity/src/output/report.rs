@@ -236,13 +236,13 @@ pub fn reference_mismatch(file: &str, text: &str, objects: &[(String, f64)]) -> 
         ));
     }
     for (name, area) in objects {
-        if let Some(Some(r)) = theirs.get(name.as_str()) {
-            if (area - r).abs() > 0.01 * r.abs().max(*area) {
-                out.push(format!(
-                    "{file}: object {name} has area {area:.4e} here and {r:.4e} in the \
-                     reference: a different scene?"
-                ));
-            }
+        if let Some(Some(r)) = theirs.get(name.as_str())
+            && (area - r).abs() > 0.01 * r.abs().max(*area)
+        {
+            out.push(format!(
+                "{file}: object {name} has area {area:.4e} here and {r:.4e} in the \
+                 reference: a different scene?"
+            ));
         }
     }
     out

@@ -1,0 +1,447 @@
+//! The host side of `programs/carm.occ` (`occ radiosity --solver carm`): the `occ` process plays
+//! the transputer host. It compiles the node program, writes the meshed scene into the root's
+//! keyboard channel in the host protocol of `programs/README.md`, runs the program on a ternary
+//! tree of `--nodes` simulated transputers, reads the convergence record and the results back
+//! from the root's screen channel, and books them into a [`Solver`] so that the outputs are
+//! written exactly as for the reference solver.
+//!
+//! The host does no radiosity: it sends the scene and its mesh and books what the nodes report
+//! (per shot, the power each patch received; at the end, the irradiance at every sample point).
+
+use std::io::Cursor;
+use std::sync::{Arc, Mutex};
+
+use glam::{DVec3, Vec3};
+use occ_codegen::network::{NetworkOptions, NetworkOutcome};
+use occ_radiosity::solver::{ConvergencePoint, Solver, Until};
+use occ_runtime::topology::Shape;
+use occ_runtime::{HostIo, NodeConfig};
+
+use crate::frontend::{self, Options};
+
+/// The node program, embedded so that `occ radiosity` works from any folder.
+pub const PROGRAM: &str = include_str!("../../../programs/carm.occ");
+
+/// Most nodes carm.occ takes (its `MAX.NODES`; each node's arrays take about 3 MB).
+const MAX_NODES: usize = 1024;
+
+/// Loop back-edges per timeslice when `--threads 1` makes runs repeat exactly (as `occ run`).
+const COUNTED_SLICE: u32 = 1024;
+
+/// Host protocol tags the root writes (programs/README.md, "Host protocol").
+mod tag {
+    pub const END: i32 = 0;
+    pub const SHOT: i32 = 1;
+    pub const RESULT: i32 = 2;
+    pub const COUNTERS: i32 = 3;
+    pub const PATCHES: i32 = 4;
+    pub const REFUSED: i32 = 5;
+}
+
+/// How to run carm.occ.
+#[derive(Clone, Copy, Debug)]
+pub struct CarmSettings {
+    /// Nodes of the ternary tree.
+    pub nodes: usize,
+    /// OS threads running the nodes (1: deterministic timeslicing).
+    pub threads: usize,
+}
+
+/// One node's counters, as carm.occ reports them and the runtime measured them.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct NodeCounters {
+    /// Node number.
+    pub node: usize,
+    /// Sample points it owns.
+    pub points: u64,
+    /// Element corners at those points.
+    pub corners: u64,
+    /// Form factors it computed.
+    pub form_factors: u64,
+    /// Shadow rays it cast.
+    pub rays: u64,
+    /// Channel communications (soft and link) it made.
+    pub communications: u64,
+    /// Fraction of the wall time it spent running processes.
+    pub busy: f64,
+    /// Peak workspace, bytes.
+    pub peak_bytes: u64,
+}
+
+/// One link direction's traffic.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct LinkCounters {
+    /// Which link.
+    pub link: String,
+    /// Messages carried.
+    pub messages: u64,
+    /// Bytes carried.
+    pub bytes: u64,
+}
+
+/// What a carm.occ run reported beside the solution it booked.
+#[derive(Clone, Debug, Default)]
+pub struct CarmReport {
+    /// Per node.
+    pub nodes: Vec<NodeCounters>,
+    /// Per link direction.
+    pub links: Vec<LinkCounters>,
+}
+
+/// Runs carm.occ on `solver`'s scene and mesh and books its solution into `solver` (irradiance,
+/// unshot power, accounts, convergence record, counters). The solver must be fresh (no shot yet)
+/// and without adaptive subdivision.
+pub fn solve(solver: &mut Solver, settings: CarmSettings) -> anyhow::Result<CarmReport> {
+    anyhow::ensure!(
+        solver.config().adapt.is_none(),
+        "--solver carm does not subdivide yet: give --no-adapt"
+    );
+    anyhow::ensure!(
+        (1..=MAX_NODES).contains(&settings.nodes),
+        "--nodes {}: carm.occ runs on 1 to {MAX_NODES} nodes",
+        settings.nodes
+    );
+    let input = host_input(solver)?;
+    let compiled = compile()?;
+    let shape: Shape = format!("tree3:{}", settings.nodes)
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--nodes {}: {e}", settings.nodes))?;
+    let screen = SharedBuf::default();
+    let errors = SharedBuf::default();
+    let host = HostIo::new(
+        Box::new(Cursor::new(input)),
+        Box::new(screen.clone()),
+        Box::new(errors.clone()),
+    )
+    .binary();
+    let mut node = NodeConfig::default();
+    if settings.threads == 1 {
+        node.counted_slices = Some(COUNTED_SLICE);
+    }
+    let opts = NetworkOptions {
+        node,
+        threads: settings.threads,
+    };
+    let outcome = compiled
+        .run_topology(shape, &opts, host)
+        .map_err(|e| anyhow::anyhow!("carm.occ: {e}"))?;
+    let out = screen.take();
+    if out.starts_with(&tag::REFUSED.to_le_bytes()) {
+        // The controller refused the scene and stopped; the other nodes' fate is no news.
+        book(solver, &out)?;
+    }
+    let failed: Vec<String> = outcome
+        .errors()
+        .iter()
+        .map(|(name, e)| format!("{name}: {e}"))
+        .collect();
+    let text = String::from_utf8_lossy(&errors.take()).into_owned();
+    anyhow::ensure!(
+        failed.is_empty(),
+        "carm.occ failed:\n{}{}",
+        failed.join("\n"),
+        text
+    );
+    let nodes = book(solver, &out)?;
+    Ok(report(&outcome, nodes))
+}
+
+/// Compiles the embedded node program.
+fn compile() -> anyhow::Result<occ_codegen::Compiled> {
+    let (front, checked) = frontend::load_text("carm.occ", PROGRAM, &Options::default());
+    let Some(front) = front else {
+        let diags: Vec<String> = checked
+            .diagnostics
+            .iter()
+            .map(|d| format!("{}:{}: {}", d.file.display(), d.line, d.message))
+            .collect();
+        anyhow::bail!("carm.occ does not compile:\n{}", diags.join("\n"));
+    };
+    let set = frontend::intrinsics();
+    occ_codegen::compile_with(
+        &front.parsed.program,
+        &front.checked,
+        &front.parsed.map,
+        &set,
+    )
+    .map_err(|e| anyhow::anyhow!("carm.occ: {e}"))
+}
+
+/// The host protocol's input: header, occluders, patches, sample points, elements
+/// (little-endian; INT is 4 bytes, INT64 and REAL64 8, REAL32 4).
+fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
+    let config = solver.config();
+    let (scene, mesh) = (solver.scene, &solver.mesh);
+    let (until_unshot, max_shots) = match config.until {
+        Until::Unshot(f) => (f, config.max_shots),
+        Until::Shots(n) => (-1.0, n.min(config.max_shots)),
+        Until::Seconds(_) | Until::Error(_) => {
+            anyhow::bail!("--solver carm takes --until unshot=F or shots=N")
+        }
+    };
+    let int = |n: usize, what: &str| {
+        i32::try_from(n).map_err(|_| anyhow::anyhow!("{what} ({n}) is too many for carm.occ"))
+    };
+    let mut w = Writer::default();
+    w.int(int(scene.triangles.len(), "scene triangles")?);
+    w.int(int(mesh.patches.len(), "patches")?);
+    w.int(int(mesh.vertices.len(), "sample points")?);
+    w.int(int(mesh.elements.len(), "elements")?);
+    w.int(config.form_factor.rays as i32);
+    w.int64(config.seed as i64);
+    w.real32(config.form_factor.offset);
+    w.int(int(max_shots.min(i32::MAX as u64) as usize, "shots")?);
+    w.real64(until_unshot);
+    w.real64(config.overshoot);
+    for t in &scene.triangles {
+        let v = t.tri.v;
+        w.vec3(v[0]);
+        w.vec3(v[1] - v[0]);
+        w.vec3(v[2] - v[0]);
+    }
+    for ((p, &o), u) in mesh
+        .patches
+        .iter()
+        .zip(&mesh.patch_object)
+        .zip(&solver.unshot)
+    {
+        for v in p.v {
+            w.vec3(v);
+        }
+        w.real64(p.area() as f64);
+        w.vec3(scene.objects[o as usize].reflectance);
+        for c in 0..3 {
+            w.real64(u[c]);
+        }
+    }
+    for v in &mesh.vertices {
+        w.vec3(v.pos);
+        w.vec3(v.normal);
+        w.vec3(v.eval);
+    }
+    for e in &mesh.elements {
+        for v in e.v {
+            w.int(v as i32);
+        }
+        w.int(e.patch as i32);
+        w.real64(mesh.tri(e).area() as f64);
+    }
+    Ok(w.0)
+}
+
+/// Books what the root wrote into `solver`; returns the nodes' own counters (node, points,
+/// corners, form factors, rays).
+fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
+    let mut r = Reader { bytes, at: 0 };
+    let rho: Vec<DVec3> = solver
+        .mesh
+        .patch_object
+        .iter()
+        .map(|&o| solver.scene.objects[o as usize].reflectance.as_dvec3())
+        .collect();
+    let patches = rho.len();
+    let mut nodes = Vec::new();
+    let mut results = 0;
+    loop {
+        match r.int()? {
+            tag::END => break,
+            tag::SHOT => {
+                let [shots, src, ffs, rays, micros] = [(); 5].map(|_| r.int());
+                let (shots, src) = (shots? as u64, src? as usize);
+                let shot = DVec3::new(r.real64()?, r.real64()?, r.real64()?);
+                let count = r.int()? as usize;
+                anyhow::ensure!(
+                    count == 3 * patches && src < patches,
+                    "carm.occ reported a shot of patch {src} with {count} received values"
+                );
+                let mut received = DVec3::ZERO;
+                let mut absorbed = DVec3::ZERO;
+                solver.unshot[src] -= shot;
+                for (p, rho) in rho.iter().enumerate() {
+                    let power = DVec3::new(r.real64()?, r.real64()?, r.real64()?);
+                    received += power;
+                    absorbed += power * (DVec3::ONE - *rho);
+                    solver.unshot[p] += power * *rho;
+                }
+                let acc = &mut solver.accounts;
+                for c in 0..3 {
+                    acc.absorbed[c] += absorbed[c];
+                    acc.escaped[c] += shot[c] - received[c];
+                }
+                let unshot = solver.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
+                acc.unshot = unshot.to_array();
+                solver.stats.shots = shots;
+                solver.stats.form_factors += ffs? as u64;
+                solver.stats.rays += rays? as u64;
+                solver.history.push(ConvergencePoint {
+                    shots,
+                    seconds: micros? as u32 as f64 * 1e-6,
+                    unshot_fraction: solver.unshot_fraction(),
+                    vertices: solver.mesh.vertices.len(),
+                });
+                solver.rms_history.push(None);
+            }
+            tag::RESULT => {
+                let g = r.int()? as usize;
+                let h = Vec3::new(r.real32()?, r.real32()?, r.real32()?);
+                let slot = solver.irradiance.get_mut(g).ok_or_else(|| {
+                    anyhow::anyhow!("carm.occ reported sample point {g}, which does not exist")
+                })?;
+                *slot = h;
+                results += 1;
+            }
+            tag::COUNTERS => {
+                let mut c = [0u64; 5];
+                for x in &mut c {
+                    *x = r.int()? as u64;
+                }
+                nodes.push(c);
+            }
+            tag::PATCHES => {
+                let count = r.int()? as usize;
+                anyhow::ensure!(
+                    count == 3 * patches,
+                    "carm.occ reported {count} patch values"
+                );
+                for (p, u) in solver.unshot.iter().enumerate() {
+                    let theirs = DVec3::new(r.real64()?, r.real64()?, r.real64()?);
+                    anyhow::ensure!(
+                        theirs == *u,
+                        "carm.occ's unshot power of patch {p} ({theirs}) disagrees with its shot \
+                         record ({u})"
+                    );
+                }
+            }
+            tag::REFUSED => {
+                let [t, p, v, s, n] = [(); 5].map(|_| r.int().unwrap_or(0));
+                anyhow::bail!(
+                    "the scene is over carm.occ's capacities: at most {t} triangles, {p} \
+                     patches, {v} sample points, {s} rays per form factor and {n} nodes"
+                );
+            }
+            other => anyhow::bail!(
+                "carm.occ wrote an unknown host message tag {other} at byte {} (first bytes {:?})",
+                r.at - 4,
+                &bytes[..bytes.len().min(64)]
+            ),
+        }
+    }
+    anyhow::ensure!(
+        results == solver.irradiance.len(),
+        "carm.occ returned {results} of {} sample points",
+        solver.irradiance.len()
+    );
+    let rms = solver.rms_error();
+    if let Some(last) = solver.rms_history.last_mut() {
+        *last = rms;
+    }
+    nodes.sort_by_key(|c| c[0]);
+    Ok(nodes)
+}
+
+/// The report's per-node and per-link figures.
+fn report(outcome: &NetworkOutcome, nodes: Vec<[u64; 5]>) -> CarmReport {
+    let wall = outcome.elapsed.as_secs_f64();
+    let nodes = outcome
+        .nodes
+        .iter()
+        .zip(nodes)
+        .map(|(n, c)| NodeCounters {
+            node: c[0] as usize,
+            points: c[1],
+            corners: c[2],
+            form_factors: c[3],
+            rays: c[4],
+            communications: n.stats.communications,
+            busy: if wall > 0.0 {
+                n.busy.as_secs_f64() / wall
+            } else {
+                0.0
+            },
+            peak_bytes: n.stats.peak_workspace_bytes,
+        })
+        .collect();
+    let links = outcome
+        .links
+        .iter()
+        .map(|l| LinkCounters {
+            link: l.name.clone(),
+            messages: l.messages,
+            bytes: l.bytes,
+        })
+        .collect();
+    CarmReport { nodes, links }
+}
+
+/// Little-endian writer of the host protocol.
+#[derive(Default)]
+struct Writer(Vec<u8>);
+
+impl Writer {
+    fn int(&mut self, v: i32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn int64(&mut self, v: i64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn real32(&mut self, v: f32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn real64(&mut self, v: f64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn vec3(&mut self, v: Vec3) {
+        for x in v.to_array() {
+            self.0.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+}
+
+/// Little-endian reader of the root's output.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take<const N: usize>(&mut self) -> anyhow::Result<[u8; N]> {
+        let b = self
+            .bytes
+            .get(self.at..self.at + N)
+            .ok_or_else(|| anyhow::anyhow!("carm.occ's output ends early (at byte {})", self.at))?;
+        self.at += N;
+        Ok(b.try_into().expect("N bytes"))
+    }
+    fn int(&mut self) -> anyhow::Result<i32> {
+        Ok(i32::from_le_bytes(self.take()?))
+    }
+    fn real32(&mut self) -> anyhow::Result<f32> {
+        Ok(f32::from_le_bytes(self.take()?))
+    }
+    fn real64(&mut self) -> anyhow::Result<f64> {
+        Ok(f64::from_le_bytes(self.take()?))
+    }
+}
+
+/// A byte buffer the runtime writes into and the host reads afterwards.
+#[derive(Clone, Default)]
+struct SharedBuf(Arc<Mutex<Vec<u8>>>);
+
+impl SharedBuf {
+    fn take(&self) -> Vec<u8> {
+        std::mem::take(&mut *self.0.lock().unwrap_or_else(|e| e.into_inner()))
+    }
+}
+
+impl std::io::Write for SharedBuf {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        self.0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .extend_from_slice(b);
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}

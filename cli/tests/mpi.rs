@@ -1,0 +1,90 @@
+//! The network programs of `tests/lang/network` under `mpirun -np 4 ... --transport mpi` agree
+//! byte for byte with their in-process runs: stdout, the errors and deadlock reports on stderr
+//! (a runtime error on one rank stops all), and the exit status. Needs a build with `--features mpi` and OpenMPI's `mpirun` on the path
+//! (`cargo test -p occ --features mpi --test mpi`); without the feature this file is empty.
+#![cfg(feature = "mpi")]
+
+use std::process::{Command, Output};
+
+/// Ranks every program runs on.
+const RANKS: &str = "4";
+
+/// (program in tests/lang/network, extra `occ run` arguments).
+const PROGRAMS: &[(&str, &[&str])] = &[
+    ("token_ring", &[]),
+    ("tree_broadcast_sum", &["--topology", "tree3:13"]),
+    ("link_multiplexer", &[]),
+    ("pipeline_sort", &[]),
+    ("alt_links_timeout", &[]),
+    ("deadlock_two_nodes", &[]),
+    ("halt_stops_ring", &[]),
+];
+
+fn occ(mpi: bool, file: &str, extra: &[&str]) -> Output {
+    let occ = env!("CARGO_BIN_EXE_occ");
+    let path = format!(
+        "{}/../tests/lang/network/{file}.occ",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut args: Vec<&str> = vec!["run", &path, "--threads", "1"];
+    args.extend(extra);
+    let mut cmd = if mpi {
+        let mut c = Command::new("mpirun");
+        // Root in CI containers, and more ranks than cores.
+        c.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+            .args(["--oversubscribe", "-np", RANKS, occ])
+            .args(&args)
+            .args(["--transport", "mpi"]);
+        c
+    } else {
+        let mut c = Command::new(occ);
+        c.args(&args);
+        c
+    };
+    cmd.output()
+        .unwrap_or_else(|e| panic!("cannot start {cmd:?} (is OpenMPI installed?): {e}"))
+}
+
+/// Stderr without mpirun's own notice of a non-zero exit (a block between lines of dashes).
+fn own_stderr(o: &Output) -> String {
+    let s = String::from_utf8_lossy(&o.stderr);
+    s.lines()
+        .take_while(|l| !l.starts_with("-----"))
+        .map(|l| format!("{l}\n"))
+        .collect()
+}
+
+#[test]
+fn network_programs_agree_across_four_ranks() {
+    for (file, extra) in PROGRAMS {
+        let here = occ(false, file, extra);
+        let there = occ(true, file, extra);
+        assert_eq!(
+            String::from_utf8_lossy(&there.stdout),
+            String::from_utf8_lossy(&here.stdout),
+            "{file}: stdout under mpirun"
+        );
+        assert_eq!(own_stderr(&there), own_stderr(&here), "{file}: stderr");
+        assert_eq!(
+            there.status.code(),
+            here.status.code(),
+            "{file}: exit status"
+        );
+    }
+}
+
+#[test]
+fn deadlock_across_ranks_is_reported_per_node() {
+    let o = occ(true, "deadlock_two_nodes", &[]);
+    let err = own_stderr(&o);
+    for want in [
+        "PROCESSOR 1",
+        "PROCESSOR 2",
+        "input from channel down",
+        "input from channel up",
+    ] {
+        assert!(err.contains(want), "missing {want:?} in {err}");
+    }
+    assert_eq!(o.status.code(), Some(1));
+}
