@@ -147,12 +147,28 @@ fn carm_refuses_what_it_cannot_do_clearly() {
             "--until unshot=F or shots=N",
         ),
         (
-            &["--solver", "carm", "--no-adapt", "--nodes", "1025"][..],
+            &[
+                "--solver",
+                "carm",
+                "--no-adapt",
+                "--until",
+                "unshot=0.01",
+                "--nodes",
+                "1025",
+            ][..],
             "carm.occ runs on 1 to 1024 nodes",
         ),
         // About 25,000 sample points: more than carm.occ's arrays hold.
         (
-            &["--solver", "carm", "--no-adapt", "--element-size", "8"][..],
+            &[
+                "--solver",
+                "carm",
+                "--no-adapt",
+                "--until",
+                "unshot=0.01",
+                "--element-size",
+                "8",
+            ][..],
             "over carm.occ's capacities: at most 4096 triangles, 2048 patches, 16384 sample points",
         ),
     ] {

@@ -147,6 +147,10 @@ impl Network {
         Self::pool(nodes, threads, Some(drive))
     }
 
+    #[allow(
+        clippy::vec_box,
+        reason = "nodes are always boxed: compiled code, links and wakers hold their addresses"
+    )]
     fn pool(
         nodes: Vec<Box<Node>>,
         threads: usize,
