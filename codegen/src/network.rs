@@ -285,11 +285,7 @@ impl Built {
         }
         self.parts.push((id, LinkPart::Whole));
         let (a, b) = if w == r {
-            let n = &mut self.nodes[w];
-            let n2: *mut Node = &mut **n;
-            // SAFETY: `connect` takes both ends mutably only to register an endpoint on each;
-            // a loop-back link registers both on the same node, one after the other.
-            self.net.connect(n, unsafe { &mut *n2 }, name)
+            self.net.connect_loop(&mut self.nodes[w], name)
         } else {
             let (lo, hi) = self.nodes.split_at_mut(w.max(r));
             let (wn, rn) = if w < r {

@@ -179,12 +179,28 @@ impl Network {
     /// Creates a link direction from `from` to `to` (both joined): returns the channel word on
     /// `from` to output to, and the one on `to` to input from.
     pub fn connect(&self, from: &mut Node, to: &mut Node, name: &str) -> (*mut Word, *mut Word) {
+        let (out, inp) = self.ends(name);
+        (
+            from.add_external(out, &format!("{name} (link out)")),
+            to.add_external(inp, &format!("{name} (link in)")),
+        )
+    }
+
+    /// A link direction from `node` back to itself (a ring of one node): as
+    /// [`Network::connect`] with both ends on `node`.
+    pub fn connect_loop(&self, node: &mut Node, name: &str) -> (*mut Word, *mut Word) {
+        let (out, inp) = self.ends(name);
+        (
+            node.add_external(out, &format!("{name} (link out)")),
+            node.add_external(inp, &format!("{name} (link in)")),
+        )
+    }
+
+    /// The two engines of a new link direction: its output end and its input end.
+    fn ends(&self, name: &str) -> (Engine, Engine) {
         let out = self.link(name);
         let inp = out.clone();
-        (
-            from.add_external(Engine::LinkOut(out), &format!("{name} (link out)")),
-            to.add_external(Engine::LinkIn(inp), &format!("{name} (link in)")),
-        )
+        (Engine::LinkOut(out), Engine::LinkIn(inp))
     }
 
     /// A new link direction, listed for statistics, with no end yet.
