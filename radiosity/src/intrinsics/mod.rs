@@ -131,6 +131,21 @@ pub static INTRINSICS: &[Intrinsic] = &[
         result: None,
         addr: voxel_occluded as *const u8,
     },
+    Intrinsic {
+        name: "RAD.RAYS.WALK",
+        params: &[
+            ValInts, ValReal32s, ValInts, ValReal32s, ValReal32s, VarBools, VarInts, VarInts,
+            ResultInt,
+        ],
+        result: None,
+        addr: walk::rays_walk as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.VOXEL.OF.POINT",
+        params: &[ValInts, ValReal32s, ValReal32s, ResultInt],
+        result: None,
+        addr: walk::voxel_of_point as *const u8,
+    },
 ];
 
 /// Floats per ray written by `RAD.SHADOW.RAYS`: origin (3), direction (3), tmin, tmax (the
@@ -580,6 +595,8 @@ pub unsafe extern "C" fn shadow_rays_batch(
 #[cfg(test)]
 mod test;
 pub mod weighted;
+
+mod walk;
 
 /// `RAD.VOXEL.OCCLUDED (VAL []REAL32 voxel, VAL []REAL32 rays, []BOOL blocked, RESULT INT
 /// count)`: the rays (8 floats each, as `RAD.SHADOW.RAYS` writes them) that the triangles of one
