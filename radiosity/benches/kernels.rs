@@ -14,9 +14,9 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::geom::Tri;
+use occ_radiosity::intrinsics::RAY_FLOATS;
 use occ_radiosity::kernels::{SamplePoint, shoot_batch};
 use occ_radiosity::mesh::{Mesh, MeshConfig};
-use occ_radiosity::intrinsics::RAY_FLOATS;
 use occ_radiosity::octree::flat::{CURSOR_INTS, START};
 use occ_radiosity::octree::{Octree, OctreeConfig, Traversal};
 use occ_radiosity::rng::Pcg32;
@@ -100,7 +100,12 @@ fn walk(c: &mut Criterion) {
     let (view, slots) = (flat.view(), flat.slots());
     let rays: Vec<f32> = ray_set(&tris, 100_000, 7)
         .iter()
-        .flat_map(|(o, d)| o.to_array().into_iter().chain(d.to_array()).chain([0.0, 0.999]))
+        .flat_map(|(o, d)| {
+            o.to_array()
+                .into_iter()
+                .chain(d.to_array())
+                .chain([0.0, 0.999])
+        })
         .collect();
     let n = rays.len() / RAY_FLOATS;
     let mut group = c.benchmark_group("walk_cornell_10k");
