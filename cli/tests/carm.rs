@@ -14,19 +14,24 @@ const SETTINGS: &[&str] = &[
     "4",
     "--element-size",
     "150",
-    "--until",
-    "unshot=0.05",
     "--image-size",
     "16",
 ];
 
-/// Runs `occ radiosity` with `extra` flags into `out`; returns its report.json.
+/// Runs `occ radiosity` with `extra` flags into `out` (until 5% of the power is left unshot,
+/// unless `extra` gives another `--until`); returns its report.json.
 fn radiosity(out: &Path, extra: &[&str]) -> serde_json::Value {
+    let until: &[&str] = if extra.contains(&"--until") {
+        &[]
+    } else {
+        &["--until", "unshot=0.05"]
+    };
     let output = Command::new(env!("CARGO_BIN_EXE_occ"))
         .arg("radiosity")
         .arg("--out")
         .arg(out)
         .args(SETTINGS)
+        .args(until)
         .args(extra)
         .output()
         .expect("the occ binary runs");
@@ -138,13 +143,44 @@ fn carm_on_1_4_13_and_40_nodes_agrees_with_the_reference_solver() {
 }
 
 #[test]
+fn carm_stops_on_the_error_estimate_where_the_reference_solver_does() {
+    let until = ["--until", "error=0.05"];
+    let reference = radiosity(
+        &scratch("carm-error-reference"),
+        &[&["--solver", "reference"][..], &until].concat(),
+    );
+    let carm = radiosity(
+        &scratch("carm-error"),
+        &[
+            &["--solver", "carm", "--nodes", "4", "--threads", "1"][..],
+            &until,
+        ]
+        .concat(),
+    );
+    let left = |r: &serde_json::Value| r["totals"]["unshot_fraction"].as_f64().expect("a number");
+    // The same shots: the same power left, up to the order of the sums of received power
+    // (parts in 1e8 here; one shot more or less would move it by parts in 100).
+    assert!(
+        (left(&carm) - left(&reference)).abs() <= 1e-6 * left(&reference),
+        "carm left {} unshot, the reference {}",
+        left(&carm),
+        left(&reference)
+    );
+    // Stopped on the estimate, with power still unshot.
+    assert!(left(&reference) > 0.0);
+    for ((name, b), (_, r)) in means(&carm).iter().zip(&means(&reference)) {
+        assert!(apart(b, r) <= 0.01, "{name}: carm {b:?} against {r:?}");
+    }
+}
+
+#[test]
 fn carm_refuses_what_it_cannot_do_clearly() {
     let out = scratch("carm-refusals");
     for (flags, says) in [
         (&["--solver", "carm"][..], "--no-adapt"),
         (
             &["--solver", "carm", "--no-adapt", "--until", "time=1"][..],
-            "--until unshot=F or shots=N",
+            "takes --until error=F, unshot=F or shots=N",
         ),
         (
             &[

@@ -15,6 +15,7 @@ use std::sync::{Arc, Mutex};
 use glam::{DVec3, Vec3};
 use occ_codegen::network::{NetworkOptions, NetworkOutcome};
 use occ_radiosity::solver::{ConvergencePoint, Solver, Until};
+use occ_runtime::remote::Transport;
 use occ_runtime::topology::Shape;
 use occ_runtime::{HostIo, NodeConfig};
 
@@ -98,11 +99,16 @@ pub struct CarmReport {
 /// Runs carm.occ on `solver`'s scene and mesh and books its solution into `solver` (irradiance,
 /// unshot power, accounts, convergence record, counters). The solver must be fresh (no shot yet)
 /// and without adaptive subdivision. `on_shot` hears of each shot as the root reports it.
+///
+/// With a `transport` (MPI), every process calls this with the same scene, mesh and settings
+/// and runs its share of the nodes; the one holding node 0 (rank 0) plays the host, books the
+/// solution and gets the report of every node and link, the others get `None`.
 pub fn solve(
     solver: &mut Solver,
     settings: &CarmSettings,
     on_shot: OnShot,
-) -> anyhow::Result<CarmReport> {
+    transport: Option<&mut dyn Transport>,
+) -> anyhow::Result<Option<CarmReport>> {
     anyhow::ensure!(
         solver.config().adapt.is_none(),
         "--solver carm does not subdivide yet: give --no-adapt"
@@ -112,7 +118,12 @@ pub fn solve(
         "--nodes {}: carm.occ runs on 1 to {MAX_NODES} nodes",
         settings.nodes
     );
-    let input = host_input(solver)?;
+    let host_here = transport.as_deref().is_none_or(|t| t.spread().rank == 0);
+    let input = if host_here {
+        host_input(solver)?
+    } else {
+        Vec::new()
+    };
     let compiled = match &settings.program {
         Some((name, text)) => compile(name, text)?,
         None => compile("carm.occ", PROGRAM)?,
@@ -142,8 +153,11 @@ pub fn solve(
         threads: settings.threads,
     };
     let outcome = compiled
-        .run_topology(shape, &opts, host)
+        .run_topology_over(shape, &opts, host, transport)
         .map_err(|e| anyhow::anyhow!("carm.occ: {e}"))?;
+    if !host_here {
+        return Ok(None);
+    }
     let out = screen.take();
     if out.starts_with(&tag::REFUSED.to_le_bytes()) {
         // The controller refused the scene and stopped; the other nodes' fate is no news.
@@ -162,7 +176,7 @@ pub fn solve(
         text
     );
     let nodes = book(solver, &out)?;
-    Ok(report(&outcome, nodes))
+    Ok(Some(report(&outcome, nodes)))
 }
 
 /// Compiles the node program `text` (named `name` in its diagnostics).
@@ -191,11 +205,13 @@ fn compile(name: &str, text: &str) -> anyhow::Result<occ_codegen::Compiled> {
 fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     let config = solver.config();
     let (scene, mesh) = (solver.scene, &solver.mesh);
-    let (until_unshot, max_shots) = match config.until {
-        Until::Unshot(f) => (f, config.max_shots),
-        Until::Shots(n) => (-1.0, n.min(config.max_shots)),
-        Until::Seconds(_) | Until::Error(_) => {
-            anyhow::bail!("--solver carm takes --until unshot=F or shots=N")
+    // Negative: not a stopping rule of this run.
+    let (until_unshot, until_error, max_shots) = match config.until {
+        Until::Unshot(f) => (f, -1.0, config.max_shots),
+        Until::Error(f) => (-1.0, f, config.max_shots),
+        Until::Shots(n) => (-1.0, -1.0, n.min(config.max_shots)),
+        Until::Seconds(_) => {
+            anyhow::bail!("--solver carm takes --until error=F, unshot=F or shots=N")
         }
     };
     let int = |n: usize, what: &str| {
@@ -221,6 +237,29 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     w.int(int(max_shots.min(i32::MAX as u64) as usize, "shots")?);
     w.real64(until_unshot);
     w.real64(config.overshoot);
+    w.real64(until_error);
+    w.int(int(scene.objects.len(), "objects")?);
+    // What the error estimate needs (occ_radiosity::estimate): the surfaces' area and mean
+    // reflectance, and per object its area, emitted radiosity and reflectance.
+    let tally = solver.tally();
+    w.real64(tally.total_area);
+    for c in 0..3 {
+        w.real64(tally.rho_avg[c]);
+    }
+    let mut object_area = vec![0.0f64; scene.objects.len()];
+    for e in &mesh.elements {
+        object_area[e.object as usize] += mesh.tri(e).area() as f64;
+    }
+    for (o, area) in scene.objects.iter().zip(object_area) {
+        w.real64(area);
+        let emitted = (o.emission * std::f32::consts::PI).as_dvec3();
+        for c in 0..3 {
+            w.real64(emitted[c]);
+        }
+        for c in 0..3 {
+            w.real64(o.reflectance[c] as f64);
+        }
+    }
     for t in &scene.triangles {
         let v = t.tri.v;
         w.vec3(v[0]);
@@ -241,6 +280,7 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
         for c in 0..3 {
             w.real64(u[c]);
         }
+        w.int(o as i32);
     }
     for v in &mesh.vertices {
         w.vec3(v.pos);
@@ -284,8 +324,8 @@ enum Message {
     /// Every patch's unshot power left.
     Patches(Vec<DVec3>),
     /// The scene is over the program's capacities: its limits on triangles, patches, sample
-    /// points, rays, nodes, elements and elements of one patch.
-    Refused([i32; 7]),
+    /// points, rays, nodes, elements, elements of one patch and objects.
+    Refused([i32; 8]),
     /// The end.
     End,
 }
@@ -346,7 +386,7 @@ impl Message {
                 Message::Patches((0..count / 3).map(|_| rgb64(r)).collect::<Result<_, _>>()?)
             }
             tag::REFUSED => {
-                let mut limits = [0i32; 7];
+                let mut limits = [0i32; 8];
                 for x in &mut limits {
                     *x = r.int()?;
                 }
@@ -402,13 +442,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
                     absorbed += *power * (DVec3::ONE - *rho);
                     *unshot += *power * *rho;
                 }
-                let acc = &mut solver.accounts;
-                for c in 0..3 {
-                    acc.absorbed[c] += absorbed[c];
-                    acc.escaped[c] += shot[c] - total[c];
-                }
-                let unshot = solver.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
-                acc.unshot = unshot.to_array();
+                solver.book_totals(shot, total, absorbed);
                 solver.stats.shots = shots;
                 solver.stats.form_factors += form_factors;
                 solver.stats.rays += rays;
@@ -442,10 +476,10 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
                     );
                 }
             }
-            Message::Refused([t, p, v, s, n, e, k]) => anyhow::bail!(
+            Message::Refused([t, p, v, s, n, e, k, o]) => anyhow::bail!(
                 "the scene is over carm.occ's capacities: at most {t} triangles, {p} patches, \
-                 {v} sample points, {e} elements ({k} in one patch), {s} rays per form factor \
-                 and {n} nodes"
+                 {v} sample points, {e} elements ({k} in one patch), {o} objects, {s} rays per \
+                 form factor and {n} nodes"
             ),
         }
     }
