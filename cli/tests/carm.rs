@@ -26,12 +26,16 @@ fn radiosity(out: &Path, extra: &[&str]) -> serde_json::Value {
     } else {
         &["--until", "unshot=0.05"]
     };
+    radiosity_with(out, &[SETTINGS, until].concat(), extra)
+}
+
+/// Runs `occ radiosity` with `settings`, then `extra`, into `out`; returns its report.json.
+fn radiosity_with(out: &Path, settings: &[&str], extra: &[&str]) -> serde_json::Value {
     let output = Command::new(env!("CARGO_BIN_EXE_occ"))
         .arg("radiosity")
         .arg("--out")
         .arg(out)
-        .args(SETTINGS)
-        .args(until)
+        .args(settings)
         .args(extra)
         .output()
         .expect("the occ binary runs");
@@ -142,6 +146,41 @@ fn carm_on_1_4_13_and_40_nodes_agrees_with_the_reference_solver() {
     }
 }
 
+/// A scene whose octree has several voxels, so that shadow rays walk from voxel to voxel.
+#[test]
+fn carm_walks_a_many_voxel_octree_as_the_reference_solver() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
+    let settings = [
+        scene,
+        "--no-adapt",
+        "--rays",
+        "4",
+        "--element-size",
+        "1",
+        "--until",
+        "unshot=0.05",
+        "--image-size",
+        "16",
+    ];
+    let reference = radiosity_with(&scratch("carm-lamp-reference"), &settings, &[]);
+    let leaves = reference["scene"]["octree"]["leaves"]
+        .as_u64()
+        .expect("leaves");
+    assert!(leaves > 1, "the table lamp's octree has {leaves} leaf");
+    let carm = radiosity_with(
+        &scratch("carm-lamp"),
+        &settings,
+        &["--solver", "carm", "--nodes", "4", "--threads", "1"],
+    );
+    for ((name, b), (_, r)) in means(&carm).iter().zip(&means(&reference)) {
+        assert!(
+            apart(b, r) <= 0.01,
+            "{name}: carm {b:?} against reference {r:?} ({:.3}% apart)",
+            100.0 * apart(b, r)
+        );
+    }
+}
+
 #[test]
 fn carm_stops_on_the_error_estimate_where_the_reference_solver_does() {
     let until = ["--until", "error=0.05"];
@@ -205,7 +244,8 @@ fn carm_refuses_what_it_cannot_do_clearly() {
                 "--element-size",
                 "8",
             ][..],
-            "over carm.occ's capacities: at most 4096 triangles, 2048 patches, 16384 sample points",
+            "over carm.occ's capacities: at most an octree of 65536 tree INTs and 8192 voxels \
+             of 262144 REAL32s in all (16384 in one), 2048 patches, 16384 sample points",
         ),
     ] {
         let output = Command::new(env!("CARGO_BIN_EXE_occ"))

@@ -5,8 +5,9 @@
 //! from the root's screen channel, and books them into a [`Solver`] so that the outputs are
 //! written exactly as for the reference solver.
 //!
-//! The host does no radiosity: it sends the scene and its mesh and books what the nodes report
-//! (per shot, the power each patch received; at the end, the irradiance at every sample point).
+//! The host does no radiosity: it sends the reference solver's octree in its flat form (tree,
+//! frame, voxels) and the mesh, and books what the nodes report (per shot, the power each patch
+//! received; at the end, the irradiance at every sample point).
 
 use std::f64::consts::PI;
 use std::io::Cursor;
@@ -24,7 +25,7 @@ use crate::frontend::{self, Options};
 /// The node program, embedded so that `occ radiosity` works from any folder.
 pub const PROGRAM: &str = include_str!("../../../programs/carm.occ");
 
-/// Most nodes carm.occ takes (its `MAX.NODES`; each node's arrays take about 3 MB).
+/// Most nodes carm.occ takes (its `MAX.NODES`; each node's arrays take about 9 MB).
 const MAX_NODES: usize = 1024;
 
 /// Loop back-edges per timeslice when `--threads 1` makes runs repeat exactly (as `occ run`).
@@ -200,8 +201,9 @@ fn compile(name: &str, text: &str) -> anyhow::Result<occ_codegen::Compiled> {
     .map_err(|e| anyhow::anyhow!("{name}: {e}"))
 }
 
-/// The host protocol's input: header, occluders, patches, sample points, elements
-/// (little-endian; INT is 4 bytes, INT64 and REAL64 8, REAL32 4).
+/// The host protocol's input: header, the octree's frame and tree, its voxels, patches, sample
+/// points, elements (little-endian; INT is 4 bytes, INT64 and REAL64 8, REAL32 4). The octree is
+/// the reference solver's own, in its flat form, so the nodes' shadow rays meet what its rays do.
 fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     let config = solver.config();
     let (scene, mesh) = (solver.scene, &solver.mesh);
@@ -217,8 +219,17 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     let int = |n: usize, what: &str| {
         i32::try_from(n).map_err(|_| anyhow::anyhow!("{what} ({n}) is too many for carm.occ"))
     };
+    let flat = solver
+        .octree
+        .flat()
+        .map_err(|e| anyhow::anyhow!("carm.occ cannot take the scene's octree: {e}"))?;
+    let voxels = flat.voxel_count();
+    let largest = (0..voxels).map(|v| flat.voxel(v).len()).max().unwrap_or(0);
     let mut w = Writer::default();
-    w.int(int(scene.triangles.len(), "scene triangles")?);
+    w.int(int(flat.tree.len(), "the octree's tree INTs")?);
+    w.int(int(voxels, "voxels")?);
+    w.int(int(flat.pool().len(), "the voxels' REAL32s")?);
+    w.int(int(largest, "the largest voxel's REAL32s")?);
     w.int(int(mesh.patches.len(), "patches")?);
     w.int(int(mesh.vertices.len(), "sample points")?);
     w.int(int(mesh.elements.len(), "elements")?);
@@ -260,11 +271,18 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
             w.real64(o.reflectance[c] as f64);
         }
     }
-    for t in &scene.triangles {
-        let v = t.tri.v;
-        w.vec3(v[0]);
-        w.vec3(v[1] - v[0]);
-        w.vec3(v[2] - v[0]);
+    for &x in &flat.frame {
+        w.real32(x);
+    }
+    for &x in &flat.tree {
+        w.int(x);
+    }
+    for v in 0..voxels {
+        let block = flat.voxel(v);
+        w.int(block.len() as i32);
+        for &x in block {
+            w.real32(x);
+        }
     }
     for ((p, &o), u) in mesh
         .patches
@@ -323,9 +341,10 @@ enum Message {
     Counters([u64; 5]),
     /// Every patch's unshot power left.
     Patches(Vec<DVec3>),
-    /// The scene is over the program's capacities: its limits on triangles, patches, sample
-    /// points, rays, nodes, elements, elements of one patch and objects.
-    Refused([i32; 8]),
+    /// The scene is over the program's capacities: its limits on the tree's INTs, voxels, the
+    /// voxels' REAL32s, one voxel's REAL32s, patches, sample points, rays, nodes, elements,
+    /// elements of one patch and objects.
+    Refused([i32; 11]),
     /// The end.
     End,
 }
@@ -386,7 +405,7 @@ impl Message {
                 Message::Patches((0..count / 3).map(|_| rgb64(r)).collect::<Result<_, _>>()?)
             }
             tag::REFUSED => {
-                let mut limits = [0i32; 8];
+                let mut limits = [0i32; 11];
                 for x in &mut limits {
                     *x = r.int()?;
                 }
@@ -476,10 +495,11 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
                     );
                 }
             }
-            Message::Refused([t, p, v, s, n, e, k, o]) => anyhow::bail!(
-                "the scene is over carm.occ's capacities: at most {t} triangles, {p} patches, \
-                 {v} sample points, {e} elements ({k} in one patch), {o} objects, {s} rays per \
-                 form factor and {n} nodes"
+            Message::Refused([t, x, f, b, p, v, s, n, e, k, o]) => anyhow::bail!(
+                "the scene is over carm.occ's capacities: at most an octree of {t} tree INTs and \
+                 {x} voxels of {f} REAL32s in all ({b} in one), {p} patches, {v} sample points, \
+                 {e} elements ({k} in one patch), {o} objects, {s} rays per form factor and {n} \
+                 nodes"
             ),
         }
     }
