@@ -152,7 +152,10 @@ mod test {
 
     fn entry(name: &str) -> *const u8 {
         let e = INTRINSICS.iter().find(|i| i.name == name).expect(name);
-        assert_eq!(e.machine_params().len(), e.params.len() + e.params.iter().filter(|p| p.is_array()).count());
+        assert_eq!(
+            e.machine_params().len(),
+            e.params.len() + e.params.iter().filter(|p| p.is_array()).count()
+        );
         e.addr
     }
 
@@ -248,10 +251,28 @@ mod test {
         assert_eq!(blocked, want);
         // A wrong length answers -1 and writes nothing.
         let (mut b, mut c) = (vec![5u8; n], vec![START; CURSOR_INTS * n]);
-        let bad = walk(&flat.tree, &flat.frame, &slot[1..], &pool, &rays, &mut b, &mut c, &mut missing);
+        let bad = walk(
+            &flat.tree,
+            &flat.frame,
+            &slot[1..],
+            &pool,
+            &rays,
+            &mut b,
+            &mut c,
+            &mut missing,
+        );
         assert_eq!(bad, -1);
         assert!(b.iter().all(|&x| x == 5));
-        let bad = walk(&flat.tree[1..], &flat.frame, &slot, &pool, &rays, &mut b, &mut c, &mut missing);
+        let bad = walk(
+            &flat.tree[1..],
+            &flat.frame,
+            &slot,
+            &pool,
+            &rays,
+            &mut b,
+            &mut c,
+            &mut missing,
+        );
         assert_eq!(bad, -1);
     }
 

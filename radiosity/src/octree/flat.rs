@@ -306,7 +306,10 @@ impl<'a> FlatView<'a> {
         let (rays, rest) = rays.as_chunks::<RAY_FLOATS>();
         let n = rays.len();
         let cells = 1i32 << self.depth;
-        let cursor = cursor.get_mut(..CURSOR_INTS * n)?.as_chunks_mut::<CURSOR_INTS>().0;
+        let cursor = cursor
+            .get_mut(..CURSOR_INTS * n)?
+            .as_chunks_mut::<CURSOR_INTS>()
+            .0;
         let cursor_ok = |c: &[i32; CURSOR_INTS]| {
             c[0] == START || c[0] == DONE || c.iter().all(|x| (0..cells).contains(x))
         };
@@ -356,7 +359,8 @@ impl<'a> FlatView<'a> {
         let o = Vec3::new(ray[0], ray[1], ray[2]);
         let d = Vec3::new(ray[3], ray[4], ray[5]);
         let (tmin, tmax) = (ray[6], ray[7]);
-        if !(tmin < tmax) {
+        // An empty ray, or one with a NaN bound, is answered at once.
+        if tmin.partial_cmp(&tmax) != Some(std::cmp::Ordering::Less) {
             return Step::Clear;
         }
         let Some(mut w) = Walker::start(self, path, o, d, tmin, tmax) else {

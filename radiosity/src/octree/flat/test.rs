@@ -29,10 +29,12 @@ fn scenes() -> Vec<(&'static str, Vec<Tri>, OctreeConfig)> {
 
 /// A point in the scene's bounding box, widened by a quarter on each side.
 fn point_near(tris: &[Tri], rng: &mut Pcg32) -> Vec3 {
-    let (lo, hi) = tris.iter().flat_map(|t| t.v).fold(
-        (Vec3::INFINITY, Vec3::NEG_INFINITY),
-        |(lo, hi), v| (lo.min(v), hi.max(v)),
-    );
+    let (lo, hi) = tris
+        .iter()
+        .flat_map(|t| t.v)
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
     let u = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
     lo - (hi - lo) * 0.25 + u * (hi - lo) * 1.5
 }
@@ -199,7 +201,14 @@ fn with_part_of_the_voxels_held_repeated_calls_answer_as_the_octree() {
                     .collect();
                 let count = flat
                     .view()
-                    .walk(&slot, flat.pool(), &rays, &mut blocked, &mut cursor, &mut [])
+                    .walk(
+                        &slot,
+                        flat.pool(),
+                        &rays,
+                        &mut blocked,
+                        &mut cursor,
+                        &mut [],
+                    )
                     .expect("well formed");
                 assert!(count > 0, "{name}: half the voxels cannot answer every ray");
                 let all = flat.slots();
@@ -211,7 +220,10 @@ fn with_part_of_the_voxels_held_repeated_calls_answer_as_the_octree() {
                 continue;
             }
             let (blocked, calls) = walk_fetching(&flat, &rays, &mut held, missing_len, &mut rng);
-            assert_eq!(blocked, want, "{name}, {fraction} held, {missing_len} a call");
+            assert_eq!(
+                blocked, want,
+                "{name}, {fraction} held, {missing_len} a call"
+            );
             assert!(calls > 1, "{name}: some voxel was missing");
         }
     }
@@ -242,7 +254,14 @@ fn rays_are_stopped_at_their_first_missing_voxel_in_order() {
     let mut asked = Vec::new();
     loop {
         let count = view
-            .walk(&slot, flat.pool(), &ray, &mut blocked, &mut cursor, &mut missing)
+            .walk(
+                &slot,
+                flat.pool(),
+                &ray,
+                &mut blocked,
+                &mut cursor,
+                &mut missing,
+            )
             .expect("well formed");
         if count == 0 {
             break;
@@ -312,7 +331,11 @@ fn the_voxel_at_a_point_is_the_leaf_whose_box_holds_it() {
         let (lo, hi) = tree.node_box(node);
         let u = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
         let inside = lo + (hi - lo) * (0.01 + 0.98 * u);
-        let want = flat.leaves.iter().position(|&l| l == n).map_or(-1, |v| v as i32);
+        let want = flat
+            .leaves
+            .iter()
+            .position(|&l| l == n)
+            .map_or(-1, |v| v as i32);
         assert_eq!(view.voxel_at(inside), Some(want), "node {n}");
     }
     let (lo, hi) = tree.node_box(&tree.nodes[0]);
@@ -331,7 +354,14 @@ fn wrong_lengths_and_cursors_answer_none_and_write_nothing() {
     let rays = rays(&tris, 4, 5);
     let check = |slot: &[i32], rays: &[f32], blocked_len: usize, cursor: &[i32]| {
         let (mut blocked, mut cur, mut missing) = (vec![9; blocked_len], cursor.to_vec(), [9]);
-        let got = view.walk(slot, flat.pool(), rays, &mut blocked, &mut cur, &mut missing);
+        let got = view.walk(
+            slot,
+            flat.pool(),
+            rays,
+            &mut blocked,
+            &mut cur,
+            &mut missing,
+        );
         assert_eq!(got, None);
         assert!(blocked.iter().all(|&b| b == 9) && cur == cursor && missing == [9]);
     };
