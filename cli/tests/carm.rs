@@ -172,6 +172,17 @@ fn carm_walks_a_many_voxel_octree_as_the_reference_solver() {
         &settings,
         &["--solver", "carm", "--nodes", "4", "--threads", "1"],
     );
+    // Every node holds every voxel (geometry is replicated), and says so.
+    for node in carm["nodes"].as_array().expect("nodes") {
+        let voxels = node["voxels"].as_u64().expect("voxels");
+        assert!(voxels > 1 && voxels <= leaves, "{node}");
+        assert!(
+            node["voxel_bytes"].as_u64().expect("voxel bytes") > 0,
+            "{node}"
+        );
+        assert_eq!(node["voxels"], carm["nodes"][0]["voxels"]);
+        assert_eq!(node["voxel_bytes"], carm["nodes"][0]["voxel_bytes"]);
+    }
     for ((name, b), (_, r)) in means(&carm).iter().zip(&means(&reference)) {
         assert!(
             apart(b, r) <= 0.01,

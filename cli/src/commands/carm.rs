@@ -69,6 +69,10 @@ pub struct NodeCounters {
     pub form_factors: u64,
     /// Shadow rays it cast.
     pub rays: u64,
+    /// Voxels of the octree it held at the end.
+    pub voxels: u64,
+    /// Their bytes.
+    pub voxel_bytes: u64,
     /// Channel communications (soft and link) it made.
     pub communications: u64,
     /// Fraction of the wall time it spent running processes.
@@ -337,8 +341,8 @@ enum Message {
     },
     /// The irradiance at sample point `0`.
     Result(usize, Vec3),
-    /// A node's counters: node, points, corners, form factors, rays.
-    Counters([u64; 5]),
+    /// A node's counters: node, points, corners, form factors, rays, voxels held, their bytes.
+    Counters([u64; 7]),
     /// Every patch's unshot power left.
     Patches(Vec<DVec3>),
     /// The scene is over the program's capacities: its limits on the tree's INTs, voxels, the
@@ -394,7 +398,7 @@ impl Message {
                 Message::Result(g, Vec3::new(r.real32()?, r.real32()?, r.real32()?))
             }
             tag::COUNTERS => {
-                let mut c = [0u64; 5];
+                let mut c = [0u64; 7];
                 for x in &mut c {
                     *x = r.int()? as u64;
                 }
@@ -417,8 +421,8 @@ impl Message {
 }
 
 /// Books what the root wrote into `solver`; returns the nodes' own counters (node, points,
-/// corners, form factors, rays).
-fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
+/// corners, form factors, rays, voxels held, their bytes).
+fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
     let rho: Vec<DVec3> = solver
         .mesh
         .patch_object
@@ -517,7 +521,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
 }
 
 /// The report's per-node and per-link figures.
-fn report(outcome: &NetworkOutcome, nodes: Vec<[u64; 5]>) -> CarmReport {
+fn report(outcome: &NetworkOutcome, nodes: Vec<[u64; 7]>) -> CarmReport {
     let wall = outcome.elapsed.as_secs_f64();
     let nodes = outcome
         .nodes
@@ -529,6 +533,8 @@ fn report(outcome: &NetworkOutcome, nodes: Vec<[u64; 5]>) -> CarmReport {
             corners: c[2],
             form_factors: c[3],
             rays: c[4],
+            voxels: c[5],
+            voxel_bytes: c[6],
             communications: n.stats.communications,
             busy: if wall > 0.0 {
                 n.busy.as_secs_f64() / wall
