@@ -16,6 +16,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod analysis;
 pub mod formfactor;
 pub mod generate;
 pub mod geom;
@@ -25,6 +26,7 @@ pub mod kernels;
 pub mod mesh;
 pub mod octree;
 pub mod output;
+pub mod overshoot;
 pub mod packet;
 pub mod pathtrace;
 pub mod rng;

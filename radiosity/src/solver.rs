@@ -17,11 +17,13 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::analysis::{self, SceneAnalysis, Stages};
 use crate::formfactor::{FormFactorConfig, SourceDensity};
 use crate::geom::Tri;
-use crate::kernels::{SamplePoint, shoot_batch_weighted};
+use crate::kernels::{SamplePoint, shoot_batch_visibility};
 use crate::mesh::Mesh;
 use crate::octree::{Octree, OctreeConfig};
+use crate::overshoot::{self, Acceleration};
 use crate::scene::Scene;
 
 /// Cells per side of the grid that tabulates a shooting patch's unshot radiosity
@@ -118,12 +120,16 @@ pub struct SolverConfig {
     /// Overshooting (over-relaxation) factor: a shot sends `overshoot ×` the unshot power and
     /// leaves the rest (negative beyond 1) as unshot. 1 = plain progressive refinement.
     pub overshoot: f64,
+    /// Overshooting by the ambient estimate ([`crate::overshoot`]).
+    pub acceleration: Acceleration,
     /// Stopping rule.
     pub until: Until,
     /// Hard limit on shots whatever the rule.
     pub max_shots: u64,
     /// Seed of the source sampling.
     pub seed: u64,
+    /// Run every stage even where the scene does not need it ([`crate::analysis`]).
+    pub all_stages: bool,
 }
 
 impl Default for SolverConfig {
@@ -132,9 +138,11 @@ impl Default for SolverConfig {
             form_factor: FormFactorConfig::default(),
             adapt: None,
             overshoot: 1.0,
+            acceleration: Acceleration::Auto,
             until: Until::Unshot(0.01),
             max_shots: 1_000_000,
             seed: 1,
+            all_stages: false,
         }
     }
 }
@@ -194,6 +202,8 @@ pub struct SolveStats {
     pub analytic_form_factors: u64,
     /// Edges split by adaptive subdivision.
     pub adaptive_splits: u64,
+    /// Shots that overshot by the ambient estimate ([`crate::overshoot`]).
+    pub overshoots: u64,
     /// Seconds spent shooting.
     pub seconds: f64,
 }
@@ -216,6 +226,10 @@ pub struct Solver<'a> {
     pub history: Vec<ConvergencePoint>,
     /// Counters.
     pub stats: SolveStats,
+    /// What the scene's shape showed ([`crate::analysis`]).
+    pub analysis: SceneAnalysis,
+    /// The stages this solve runs.
+    pub stages: Stages,
     /// Reference mean B per object (from `--reference`), `None` for objects it lacks.
     pub reference: Option<Vec<Option<DVec3>>>,
     /// Relative RMS error against the reference, one entry per history row.
@@ -256,7 +270,10 @@ impl<'a> Solver<'a> {
             unshot[e.patch as usize] += *u;
         }
         let emitted = unshot.iter().fold(DVec3::ZERO, |s, u| s + *u).to_array();
+        let analysis = SceneAnalysis::of(&mesh.patches, scene.diagonal());
         Solver {
+            analysis,
+            stages: Stages::for_scene(&analysis, config.all_stages),
             scene,
             irradiance: vec![Vec3::ZERO; mesh.vertices.len()],
             mesh,
@@ -315,9 +332,14 @@ impl<'a> Solver<'a> {
 
     /// Shoots the patch with the most unshot power; returns false when nothing is left.
     pub fn shoot_once(&mut self) -> bool {
-        let Some(src) = self.pick_shooter() else {
+        // The ambient irradiance to overshoot by, when overshooting ([`crate::overshoot`]).
+        let ambient = (self.config.acceleration)
+            .active(self.reflected_share())
+            .then(|| self.ambient().as_dvec3());
+        let Some(src) = self.pick_shooter(ambient) else {
             return false;
         };
+        let borrowed = ambient.map_or_else(Vec::new, |a| self.borrow_overshoot(src, a));
         let shot = self.unshot[src] * self.config.overshoot;
         let density = self.source_density(src);
         self.unshot[src] -= shot;
@@ -329,10 +351,62 @@ impl<'a> Solver<'a> {
         }
         let delta_b = (shot / self.patch_area[src]).as_vec3();
         let factors = self.shoot_all(src, density.as_ref());
-        let factors = self.refine(src, factors, shot, density.as_ref());
+        let mut factors = self.refine(src, factors, shot, density.as_ref());
+        if self.stages.close_rows {
+            self.close_row(src, &mut factors);
+        }
         self.book(src, shot, delta_b, &factors);
+        self.repay_overshoot(src, &borrowed);
         self.stats.shots += 1;
         true
+    }
+
+    /// Scales this shot's form factors so that the receivers get all the power patch `src`
+    /// sends ([`analysis::row_scale`]; only for closed scenes).
+    fn close_row(&self, src: usize, factors: &mut [f32]) {
+        let received: f64 = (self.mesh.elements.iter().zip(&self.element_area))
+            .map(|(e, &a)| a * e.v.iter().map(|&v| factors[v as usize] as f64).sum::<f64>() / 3.0)
+            .sum();
+        let scale = analysis::row_scale(self.patch_area[src], received) as f32;
+        factors.iter_mut().for_each(|f| *f *= scale);
+    }
+
+    /// Adds the overshoot of patch `src` by the ambient irradiance `ambient`
+    /// ([`crate::overshoot`]) to its unshot power before it shoots; returns the amount per
+    /// element of the patch, for [`Solver::repay_overshoot`] to take away after the shot.
+    fn borrow_overshoot(&mut self, src: usize, ambient: DVec3) -> Vec<(usize, DVec3)> {
+        let parts: Vec<usize> = (0..self.mesh.elements.len())
+            .filter(|&i| self.mesh.elements[i].patch as usize == src)
+            .collect();
+        let rho_area: Vec<(DVec3, f64)> = parts
+            .iter()
+            .map(|&i| {
+                let object = self.mesh.elements[i].object as usize;
+                let rho = self.scene.objects[object].reflectance.as_dvec3();
+                (rho, self.element_area[i])
+            })
+            .collect();
+        let amounts = overshoot::element_amounts(ambient, &rho_area);
+        for (&i, a) in parts.iter().zip(&amounts) {
+            self.element_unshot[i] += *a;
+            self.unshot[src] += *a;
+        }
+        self.stats.overshoots += 1;
+        parts.into_iter().zip(amounts).collect()
+    }
+
+    /// Takes the overshoot lent by [`Solver::borrow_overshoot`] away again: the patch's unshot
+    /// power goes negative by it, and the accounts see it.
+    fn repay_overshoot(&mut self, src: usize, borrowed: &[(usize, DVec3)]) {
+        if borrowed.is_empty() {
+            return;
+        }
+        for &(i, a) in borrowed {
+            self.element_unshot[i] -= a;
+            self.unshot[src] -= a;
+        }
+        let unshot = self.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
+        self.accounts.unshot = unshot.to_array();
     }
 
     /// How the unshot radiosity of patch `src` varies over it (its elements' unshot power over
@@ -361,12 +435,21 @@ impl<'a> Solver<'a> {
         })
     }
 
-    fn pick_shooter(&self) -> Option<usize> {
+    /// The patch with the most power to shoot: its unshot power, plus its overshoot when
+    /// overshooting by `ambient` (so that a patch whose unshot power is its own overshoot,
+    /// negated, waits for the light that pays it back).
+    fn pick_shooter(&self, ambient: Option<DVec3>) -> Option<usize> {
+        let over = |i: usize| {
+            ambient.map_or(DVec3::ZERO, |a| {
+                let object = self.mesh.patch_object[i] as usize;
+                overshoot::patch_amount(self.scene.objects[object].reflectance.as_dvec3(), self.patch_area[i], a)
+            })
+        };
         let (best, power) = self
             .unshot
             .iter()
             .enumerate()
-            .map(|(i, u)| (i, u.abs().element_sum()))
+            .map(|(i, u)| (i, (*u + over(i)).abs().element_sum()))
             .fold((0, 0.0), |b, x| if x.1 > b.1 { x } else { b });
         (power > 0.0).then_some(best)
     }
@@ -386,13 +469,13 @@ impl<'a> Solver<'a> {
         let source = self.mesh.patches[src];
         let seed = self.config.seed ^ (self.stats.shots << 20) ^ src as u64;
         let config = self.config.form_factor;
-        let octree = &self.octree;
+        let octree = self.stages.shadow_rays.then_some(&self.octree);
         let chunks: Vec<(Vec<f32>, crate::kernels::BatchStats)> = points
             .par_chunks(256)
             .enumerate()
             .map(|(i, chunk)| {
                 let mut out = vec![0.0; chunk.len()];
-                let stats = shoot_batch_weighted(
+                let stats = shoot_batch_visibility(
                     octree,
                     &source,
                     density,
@@ -577,10 +660,27 @@ impl<'a> Solver<'a> {
     /// closure and the reflectance: `c Σ unshot / Σ A × 1 / (1 - c r)`. Before the first shot
     /// `c = 1` and `r = ρ_avg`, Cohen's form.
     pub fn ambient(&self) -> Vec3 {
+        self.ambient_of(self.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u))
+    }
+
+    /// [`Solver::ambient`] of the unshot power's magnitude: the same where no power is negative;
+    /// a bound on what is still to come where overshooting made some negative.
+    fn ambient_bound(&self) -> Vec3 {
+        self.ambient_of(self.unshot.iter().fold(DVec3::ZERO, |s, u| s + u.abs()))
+    }
+
+    /// The ambient irradiance that the unshot power `unshot` (summed over patches) brings.
+    fn ambient_of(&self, unshot: DVec3) -> Vec3 {
         let total_area: f64 = self.element_area.iter().sum();
-        let unshot = self.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
         let (c, r) = self.closure();
         (unshot * c / total_area / (DVec3::ONE - c * r).max(DVec3::splat(1e-6))).as_vec3()
+    }
+
+    /// The share of shot power that comes back as unshot power, per channel: `c r` of
+    /// [`Solver::ambient`] (before the first shot, the area-weighted mean reflectance).
+    pub fn reflected_share(&self) -> DVec3 {
+        let (c, r) = self.closure();
+        c * r
     }
 
     /// The received share `c` of shot power and the reflected share `r` of received power, per
@@ -614,7 +714,7 @@ impl<'a> Solver<'a> {
     /// only through a door, not yet reached) have `B` near 0 and so an estimate near 1, which
     /// keeps the solve going until light reaches them.
     pub fn estimated_errors(&self) -> Vec<f64> {
-        let ambient = self.ambient().as_dvec3();
+        let ambient = self.ambient_bound().as_dvec3();
         self.object_means()
             .into_iter()
             .zip(&self.scene.objects)
