@@ -193,7 +193,12 @@ mod tests {
                     p[v] = b;
                     p
                 };
-                let q = [corner(0.0, 0.0), corner(s, 0.0), corner(s, s), corner(0.0, s)];
+                let q = [
+                    corner(0.0, 0.0),
+                    corner(s, 0.0),
+                    corner(s, s),
+                    corner(0.0, s),
+                ];
                 let mut t = [Tri::new(q[0], q[1], q[2]), Tri::new(q[0], q[2], q[3])];
                 let inward = if hi { -1.0 } else { 1.0 };
                 if t[0].normal()[axis] * inward < 0.0 {

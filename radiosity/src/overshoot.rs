@@ -100,6 +100,9 @@ mod tests {
             DVec3::new(2.0, 1.0, 0.0),
             &[(DVec3::splat(0.5), 3.0), (DVec3::new(1.0, 0.0, 1.0), 1.0)],
         );
-        assert_eq!(a, vec![DVec3::new(3.0, 1.5, 0.0), DVec3::new(2.0, 0.0, 0.0)]);
+        assert_eq!(
+            a,
+            vec![DVec3::new(3.0, 1.5, 0.0), DVec3::new(2.0, 0.0, 0.0)]
+        );
     }
 }

@@ -442,7 +442,11 @@ impl<'a> Solver<'a> {
         let over = |i: usize| {
             ambient.map_or(DVec3::ZERO, |a| {
                 let object = self.mesh.patch_object[i] as usize;
-                overshoot::patch_amount(self.scene.objects[object].reflectance.as_dvec3(), self.patch_area[i], a)
+                overshoot::patch_amount(
+                    self.scene.objects[object].reflectance.as_dvec3(),
+                    self.patch_area[i],
+                    a,
+                )
             })
         };
         let (best, power) = self

@@ -70,7 +70,10 @@ fn converges(rho: &str) {
         solver.accounts
     );
     assert!(solver.analysis.closed, "the stiff box is closed");
-    assert!(solver.stats.overshoots > 0, "rho {rho}: Auto must overshoot");
+    assert!(
+        solver.stats.overshoots > 0,
+        "rho {rho}: Auto must overshoot"
+    );
 }
 
 #[test]

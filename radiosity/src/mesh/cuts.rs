@@ -8,6 +8,9 @@
 //! - A parallel face lying close in front (between `tol` and `gap`; a light hung a hair below
 //!   a ceiling, a book on a table) covers it: the face is cut along the outline of the cover
 //!   (its edges not shared with a neighbour of its own plane) and the covered pieces are hidden.
+//!   Two faces facing the same way within `tol` of one plane (a rug laid on a floor, a panel
+//!   1e-6 above it) would both receive the same light: the one in front, or the later in the
+//!   file when neither is (as a decal is drawn over what is under it), covers the other.
 
 use glam::{DVec2, DVec3};
 use rustc_hash::FxHashMap;
@@ -97,7 +100,7 @@ impl Context<'_> {
             let w = self.corners(g);
             let h = w.map(|p| frame.height(p));
             if face.normal.dot(other.normal).abs() > PARALLEL {
-                if h.iter().all(|&x| x > self.tol && x <= self.gap) {
+                if self.covers(f, g, h) {
                     covers.push(w.map(|p| frame.plane_point(p)));
                     self.outline(g, &frame, &mut cuts);
                 }
@@ -127,6 +130,22 @@ impl Context<'_> {
             }
         }
         (pieces, count)
+    }
+
+    /// Whether the parallel face `g`, its corners at heights `h` over the plane of face `f`,
+    /// covers `f`: it lies close in front, or it faces the same way within `tol` of the plane
+    /// and is in front (by more than rounding) or, level with it, later in the file.
+    fn covers(&self, f: usize, g: usize, h: [f64; 3]) -> bool {
+        if h.iter().all(|&x| x > self.tol && x <= self.gap) {
+            return true;
+        }
+        let same_way = self.input.faces[f].normal.dot(self.input.faces[g].normal) > PARALLEL;
+        if !same_way || h.iter().any(|&x| x.abs() > self.tol) {
+            return false;
+        }
+        let mean = (h[0] + h[1] + h[2]) / 3.0;
+        let level = 1e-3 * self.tol;
+        mean > level || (mean.abs() <= level && g > f)
     }
 
     /// Adds the edges of face `g` that bound its surface (no neighbour of its plane shares
