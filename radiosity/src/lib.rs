@@ -17,6 +17,7 @@
 #![deny(missing_docs)]
 
 pub mod analysis;
+pub mod convergence;
 pub mod formfactor;
 pub mod generate;
 pub mod geom;

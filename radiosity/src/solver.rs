@@ -18,6 +18,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::analysis::{self, SceneAnalysis, Stages};
+use crate::convergence::{Cadence, Errors};
 use crate::formfactor::{FormFactorConfig, SourceDensity};
 use crate::geom::Tri;
 use crate::kernels::{SamplePoint, shoot_batch_visibility};
@@ -130,6 +131,8 @@ pub struct SolverConfig {
     pub seed: u64,
     /// Run every stage even where the scene does not need it ([`crate::analysis`]).
     pub all_stages: bool,
+    /// Seconds between rows of the convergence record ([`Cadence`]; 0: a row every shot).
+    pub record_every: f64,
 }
 
 impl Default for SolverConfig {
@@ -143,6 +146,7 @@ impl Default for SolverConfig {
             max_shots: 1_000_000,
             seed: 1,
             all_stages: false,
+            record_every: 0.05,
         }
     }
 }
@@ -177,7 +181,7 @@ impl Accounts {
 }
 
 /// One row of the convergence record.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ConvergencePoint {
     /// Shots so far.
     pub shots: u64,
@@ -187,6 +191,8 @@ pub struct ConvergencePoint {
     pub unshot_fraction: f64,
     /// Sample points at this time.
     pub vertices: usize,
+    /// The error against the reference, when there is one ([`Solver::errors`]).
+    pub errors: Option<Errors>,
 }
 
 /// Counters of a solve.
@@ -222,7 +228,7 @@ pub struct Solver<'a> {
     pub unshot: Vec<DVec3>,
     /// Energy accounts.
     pub accounts: Accounts,
-    /// Convergence record (one row per shot).
+    /// Convergence record (rows at the cadence of [`SolverConfig::record_every`], and the last).
     pub history: Vec<ConvergencePoint>,
     /// Counters.
     pub stats: SolveStats,
@@ -232,8 +238,6 @@ pub struct Solver<'a> {
     pub stages: Stages,
     /// Reference mean B per object (from `--reference`), `None` for objects it lacks.
     pub reference: Option<Vec<Option<DVec3>>>,
-    /// Relative RMS error against the reference, one entry per history row.
-    pub rms_history: Vec<Option<f64>>,
     config: SolverConfig,
     patch_area: Vec<f64>,
     element_area: Vec<f64>,
@@ -287,7 +291,6 @@ impl<'a> Solver<'a> {
             history: Vec::new(),
             stats: SolveStats::default(),
             reference: None,
-            rms_history: Vec::new(),
             config,
             patch_area,
             element_area,
@@ -305,9 +308,11 @@ impl<'a> Solver<'a> {
     }
 
     /// Shoots until the stopping rule holds; `progress(shots, unshot_fraction)` is called after
-    /// every shot.
+    /// every shot. Records a row of [`Solver::history`] at the cadence of
+    /// [`SolverConfig::record_every`] and after the last shot.
     pub fn run(&mut self, mut progress: impl FnMut(u64, f64)) {
         let start = Instant::now();
+        let mut cadence = Cadence::new(self.config.record_every);
         loop {
             let done = match self.config.until {
                 Until::Unshot(f) => self.unshot_fraction() <= f,
@@ -318,16 +323,28 @@ impl<'a> Solver<'a> {
             if done || self.stats.shots >= self.config.max_shots || !self.shoot_once() {
                 break;
             }
-            self.history.push(ConvergencePoint {
-                shots: self.stats.shots,
-                seconds: start.elapsed().as_secs_f64(),
-                unshot_fraction: self.unshot_fraction(),
-                vertices: self.mesh.vertices.len(),
-            });
-            self.rms_history.push(self.rms_error());
+            let seconds = start.elapsed().as_secs_f64();
+            if cadence.due(self.stats.shots, seconds) {
+                self.record(seconds);
+            }
             progress(self.stats.shots, self.unshot_fraction());
         }
-        self.stats.seconds += start.elapsed().as_secs_f64();
+        let seconds = start.elapsed().as_secs_f64();
+        if self.history.last().map(|p| p.shots) != Some(self.stats.shots) {
+            self.record(seconds);
+        }
+        self.stats.seconds += seconds;
+    }
+
+    /// Appends a row to [`Solver::history`] for the state after `seconds` of solving.
+    pub fn record(&mut self, seconds: f64) {
+        self.history.push(ConvergencePoint {
+            shots: self.stats.shots,
+            seconds,
+            unshot_fraction: self.unshot_fraction(),
+            vertices: self.mesh.vertices.len(),
+            errors: self.errors(),
+        });
     }
 
     /// Shoots the patch with the most unshot power; returns false when nothing is left.
@@ -760,19 +777,15 @@ impl<'a> Solver<'a> {
             .collect()
     }
 
-    /// Returns the area-weighted RMS of `|B - B_ref|` over objects with a reference, relative to
-    /// the area-weighted mean `|B_ref|`; `None` without a reference.
+    /// Returns the error of the objects' means against the reference ([`Errors::of`]); `None`
+    /// without a reference.
+    pub fn errors(&self) -> Option<Errors> {
+        Errors::of(&self.object_means(), self.reference.as_ref()?)
+    }
+
+    /// Returns the area-weighted RMS relative error against the reference ([`Errors::rms`]).
     pub fn rms_error(&self) -> Option<f64> {
-        let reference = self.reference.as_ref()?;
-        let (mut err, mut norm, mut area) = (0.0, 0.0, 0.0);
-        for ((a, b), r) in self.object_means().into_iter().zip(reference) {
-            if let Some(r) = r {
-                err += a * (b - *r).length_squared();
-                norm += a * r.length();
-                area += a;
-            }
-        }
-        (area > 0.0 && norm > 0.0).then(|| (err / area).sqrt() / (norm / area))
+        self.errors().map(|e| e.rms)
     }
 
     /// Returns the configuration.
