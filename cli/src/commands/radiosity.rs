@@ -289,7 +289,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     let t3 = Instant::now();
     let network = match args.solver {
         SolverKind::Reference => {
-            progress.stage("shooting", &format!("until {:?}", args.until));
+            progress.stage("shooting", &format!("until {:?}", solver.config().until));
             solve(&mut solver, &progress);
             None
         }
