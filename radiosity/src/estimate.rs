@@ -21,7 +21,8 @@ pub struct Tally {
     pub total_area: f64,
     /// Their area-weighted mean reflectance.
     pub rho_avg: DVec3,
-    /// The power not yet shot, summed over patches (negative parts included: overshooting).
+    /// The power not yet shot, summed over patches: for the error estimate their magnitudes
+    /// (a bound on what is still to come where overshooting made some negative).
     pub unshot: DVec3,
     /// The power shot.
     pub shot: DVec3,

@@ -89,6 +89,20 @@ pub fn shoot_batch_weighted(
     seed: u64,
     out: &mut [f32],
 ) -> BatchStats {
+    shoot_batch_visibility(Some(octree), source, density, points, config, seed, out)
+}
+
+/// [`shoot_batch_weighted`] with shadow rays through `octree`, or none (`None`: every source
+/// sample is visible, as in a convex enclosure; no rays are counted).
+pub fn shoot_batch_visibility(
+    octree: Option<&Octree>,
+    source: &Tri,
+    density: Option<&SourceDensity>,
+    points: &[SamplePoint],
+    config: &FormFactorConfig,
+    seed: u64,
+    out: &mut [f32],
+) -> BatchStats {
     let mut rng = Pcg32::new(seed, 0x5eed);
     let mut samples = Vec::with_capacity(config.rays as usize + 8);
     let mut weights = Vec::with_capacity(config.rays as usize + 8);
@@ -109,11 +123,13 @@ pub fn shoot_batch_weighted(
             &samples,
             &weights,
             config,
-            |_, origin, d, tmax| octree.occluded(origin, d, 0.0, tmax, Traversal::Ropes),
+            |_, origin, d, tmax| {
+                octree.is_some_and(|o| o.occluded(origin, d, 0.0, tmax, Traversal::Ropes))
+            },
         );
         *o = f.value;
         stats.form_factors += 1;
-        stats.rays += f.rays as u64;
+        stats.rays += if octree.is_some() { f.rays as u64 } else { 0 };
         stats.analytic += f.analytic as u64;
     }
     stats

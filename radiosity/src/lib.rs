@@ -16,6 +16,8 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod analysis;
+pub mod convergence;
 pub mod estimate;
 pub mod formfactor;
 pub mod generate;
@@ -26,6 +28,7 @@ pub mod kernels;
 pub mod mesh;
 pub mod octree;
 pub mod output;
+pub mod overshoot;
 pub mod packet;
 pub mod pathtrace;
 pub mod rng;

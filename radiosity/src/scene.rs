@@ -158,6 +158,17 @@ pub enum SceneError {
         /// What was wrong.
         message: String,
     },
+    /// Occurs when the scene lies so far from the origin for its size that single precision
+    /// cannot place its vertices finely enough (`v 1e6 1e6 1e6` in a scene 1e-3 across).
+    #[error("{file}:{line}: {message}")]
+    BeyondPrecision {
+        /// File name.
+        file: String,
+        /// 1-based line number of the vertex farthest from the origin.
+        line: usize,
+        /// What was wrong.
+        message: String,
+    },
     /// Occurs when the camera comment is malformed.
     #[error(
         "{file}:{line}: malformed camera comment (expected `# camera: pos (x y z) dir (x y z) up (x y z) fov DEG`)"
@@ -273,6 +284,7 @@ pub fn load_obj(
 pub fn load_obj_with(file: &str, obj_text: &str, files: &dyn Files) -> Result<Scene, SceneError> {
     let text = obj_text.replace("\r\n", "\n");
     let mut checked = check_obj(file, &text, files)?;
+    checked.extent.check_precision(file)?;
     let (models, materials) = run_tobj(file, &text, &checked.libraries)?;
     let mut scene = Scene {
         camera: checked.camera,
@@ -296,6 +308,51 @@ struct Checked {
     left_out: Vec<String>,
     /// The diffuse reflectance to use for each material made diffuse (by name).
     diffuse: HashMap<String, [f32; 3]>,
+    /// Where the vertices lie.
+    extent: Extent,
+}
+
+/// The bounding box of the vertices and the line of the one farthest from the origin.
+#[derive(Default)]
+struct Extent {
+    lo: Vec3,
+    hi: Vec3,
+    /// The largest |coordinate| and the line of its vertex.
+    farthest: (f32, usize),
+}
+
+impl Extent {
+    fn add(&mut self, v: Vec3, line: usize) {
+        if self.farthest.1 == 0 {
+            (self.lo, self.hi) = (v, v);
+        }
+        self.lo = self.lo.min(v);
+        self.hi = self.hi.max(v);
+        let m = v.abs().max_element();
+        if m > self.farthest.0 || self.farthest.1 == 0 {
+            self.farthest = (m, line);
+        }
+    }
+
+    /// Refuses a scene whose coordinates single precision rounds by more than 1e-6 of its
+    /// size (the distance by which the solver lifts rays off surfaces).
+    fn check_precision(&self, file: &str) -> Result<(), SceneError> {
+        let (far, line) = self.farthest;
+        let size = (self.hi - self.lo).length();
+        let step = far * f32::EPSILON;
+        if line == 0 || step <= 1e-6 * size {
+            return Ok(());
+        }
+        Err(SceneError::BeyondPrecision {
+            file: file.into(),
+            line,
+            message: format!(
+                "this vertex lies {far:.3e} from the origin in a scene {size:.3e} across: \
+                 single precision places coordinates there only to {step:.1e}, more than 1e-6 \
+                 of the scene's size; move the scene nearer the origin"
+            ),
+        })
+    }
 }
 
 /// OBJ statements the loader reads or knowingly skips without a note.
@@ -323,6 +380,7 @@ fn check_obj(file: &str, text: &str, files: &dyn Files) -> Result<Checked, Scene
         libraries: HashMap::new(),
         left_out: Vec::new(),
         diffuse: HashMap::new(),
+        extent: Extent::default(),
     };
     let mut materials: Vec<String> = Vec::new();
     let mut vertices = 0usize;
@@ -341,7 +399,8 @@ fn check_obj(file: &str, text: &str, files: &dyn Files) -> Result<Checked, Scene
         let mut words = trimmed.split_whitespace();
         match words.next() {
             Some("v") => {
-                parse_numbers(file, line, words, 3)?;
+                let v = parse_numbers(file, line, words, 3)?;
+                out.extent.add(Vec3::new(v[0], v[1], v[2]), line);
                 vertices += 1;
             }
             Some("vn") => normals = true,

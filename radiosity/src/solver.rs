@@ -17,12 +17,15 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::analysis::{self, SceneAnalysis, Stages};
+use crate::convergence::{Cadence, Errors};
 use crate::estimate::{self, Tally};
 use crate::formfactor::{FormFactorConfig, SourceDensity};
 use crate::geom::Tri;
-use crate::kernels::{SamplePoint, shoot_batch_weighted};
+use crate::kernels::{SamplePoint, shoot_batch_visibility};
 use crate::mesh::Mesh;
 use crate::octree::{Octree, OctreeConfig};
+use crate::overshoot::{self, Acceleration};
 use crate::scene::Scene;
 
 /// Cells per side of the grid that tabulates a shooting patch's unshot radiosity
@@ -113,12 +116,18 @@ pub struct SolverConfig {
     /// Overshooting (over-relaxation) factor: a shot sends `overshoot ×` the unshot power and
     /// leaves the rest (negative beyond 1) as unshot. 1 = plain progressive refinement.
     pub overshoot: f64,
+    /// Overshooting by the ambient estimate ([`crate::overshoot`]).
+    pub acceleration: Acceleration,
     /// Stopping rule.
     pub until: Until,
     /// Hard limit on shots whatever the rule.
     pub max_shots: u64,
     /// Seed of the source sampling.
     pub seed: u64,
+    /// Run every stage even where the scene does not need it ([`crate::analysis`]).
+    pub all_stages: bool,
+    /// Seconds between rows of the convergence record ([`Cadence`]; 0: a row every shot).
+    pub record_every: f64,
 }
 
 impl Default for SolverConfig {
@@ -127,9 +136,12 @@ impl Default for SolverConfig {
             form_factor: FormFactorConfig::default(),
             adapt: None,
             overshoot: 1.0,
+            acceleration: Acceleration::Auto,
             until: Until::Unshot(0.01),
             max_shots: 1_000_000,
             seed: 1,
+            all_stages: false,
+            record_every: 0.05,
         }
     }
 }
@@ -164,7 +176,7 @@ impl Accounts {
 }
 
 /// One row of the convergence record.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ConvergencePoint {
     /// Shots so far.
     pub shots: u64,
@@ -174,6 +186,8 @@ pub struct ConvergencePoint {
     pub unshot_fraction: f64,
     /// Sample points at this time.
     pub vertices: usize,
+    /// The error against the reference, when there is one ([`Solver::errors`]).
+    pub errors: Option<Errors>,
 }
 
 /// Counters of a solve.
@@ -189,6 +203,8 @@ pub struct SolveStats {
     pub analytic_form_factors: u64,
     /// Edges split by adaptive subdivision.
     pub adaptive_splits: u64,
+    /// Shots that overshot by the ambient estimate ([`crate::overshoot`]).
+    pub overshoots: u64,
     /// Seconds spent shooting.
     pub seconds: f64,
 }
@@ -207,14 +223,16 @@ pub struct Solver<'a> {
     pub unshot: Vec<DVec3>,
     /// Energy accounts.
     pub accounts: Accounts,
-    /// Convergence record (one row per shot).
+    /// Convergence record (rows at the cadence of [`SolverConfig::record_every`], and the last).
     pub history: Vec<ConvergencePoint>,
     /// Counters.
     pub stats: SolveStats,
+    /// What the scene's shape showed ([`crate::analysis`]).
+    pub analysis: SceneAnalysis,
+    /// The stages this solve runs.
+    pub stages: Stages,
     /// Reference mean B per object (from `--reference`), `None` for objects it lacks.
     pub reference: Option<Vec<Option<DVec3>>>,
-    /// Relative RMS error against the reference, one entry per history row.
-    pub rms_history: Vec<Option<f64>>,
     config: SolverConfig,
     patch_area: Vec<f64>,
     element_area: Vec<f64>,
@@ -251,7 +269,10 @@ impl<'a> Solver<'a> {
             unshot[e.patch as usize] += *u;
         }
         let emitted = unshot.iter().fold(DVec3::ZERO, |s, u| s + *u).to_array();
+        let analysis = SceneAnalysis::of(&mesh.patches, scene.diagonal());
         Solver {
+            analysis,
+            stages: Stages::for_scene(&analysis, config.all_stages),
             scene,
             irradiance: vec![Vec3::ZERO; mesh.vertices.len()],
             mesh,
@@ -265,7 +286,6 @@ impl<'a> Solver<'a> {
             history: Vec::new(),
             stats: SolveStats::default(),
             reference: None,
-            rms_history: Vec::new(),
             config,
             patch_area,
             element_area,
@@ -283,9 +303,11 @@ impl<'a> Solver<'a> {
     }
 
     /// Shoots until the stopping rule holds; `progress(shots, unshot_fraction)` is called after
-    /// every shot.
+    /// every shot. Records a row of [`Solver::history`] at the cadence of
+    /// [`SolverConfig::record_every`] and after the last shot.
     pub fn run(&mut self, mut progress: impl FnMut(u64, f64)) {
         let start = Instant::now();
+        let mut cadence = Cadence::new(self.config.record_every);
         loop {
             let done = match self.config.until {
                 Until::Unshot(f) => self.unshot_fraction() <= f,
@@ -296,23 +318,40 @@ impl<'a> Solver<'a> {
             if done || self.stats.shots >= self.config.max_shots || !self.shoot_once() {
                 break;
             }
-            self.history.push(ConvergencePoint {
-                shots: self.stats.shots,
-                seconds: start.elapsed().as_secs_f64(),
-                unshot_fraction: self.unshot_fraction(),
-                vertices: self.mesh.vertices.len(),
-            });
-            self.rms_history.push(self.rms_error());
+            let seconds = start.elapsed().as_secs_f64();
+            if cadence.due(self.stats.shots, seconds) {
+                self.record(seconds);
+            }
             progress(self.stats.shots, self.unshot_fraction());
         }
-        self.stats.seconds += start.elapsed().as_secs_f64();
+        let seconds = start.elapsed().as_secs_f64();
+        if self.history.last().map(|p| p.shots) != Some(self.stats.shots) {
+            self.record(seconds);
+        }
+        self.stats.seconds += seconds;
+    }
+
+    /// Appends a row to [`Solver::history`] for the state after `seconds` of solving.
+    pub fn record(&mut self, seconds: f64) {
+        self.history.push(ConvergencePoint {
+            shots: self.stats.shots,
+            seconds,
+            unshot_fraction: self.unshot_fraction(),
+            vertices: self.mesh.vertices.len(),
+            errors: self.errors(),
+        });
     }
 
     /// Shoots the patch with the most unshot power; returns false when nothing is left.
     pub fn shoot_once(&mut self) -> bool {
-        let Some(src) = self.pick_shooter() else {
+        // The ambient irradiance to overshoot by, when overshooting ([`crate::overshoot`]).
+        let ambient = (self.config.acceleration)
+            .active(self.reflected_share())
+            .then(|| self.ambient().as_dvec3());
+        let Some(src) = self.pick_shooter(ambient) else {
             return false;
         };
+        let borrowed = ambient.map_or_else(Vec::new, |a| self.borrow_overshoot(src, a));
         let shot = self.unshot[src] * self.config.overshoot;
         let density = self.source_density(src);
         self.unshot[src] -= shot;
@@ -324,10 +363,62 @@ impl<'a> Solver<'a> {
         }
         let delta_b = (shot / self.patch_area[src]).as_vec3();
         let factors = self.shoot_all(src, density.as_ref());
-        let factors = self.refine(src, factors, shot, density.as_ref());
+        let mut factors = self.refine(src, factors, shot, density.as_ref());
+        if self.stages.close_rows {
+            self.close_row(src, &mut factors);
+        }
         self.book(src, shot, delta_b, &factors);
+        self.repay_overshoot(src, &borrowed);
         self.stats.shots += 1;
         true
+    }
+
+    /// Scales this shot's form factors so that the receivers get all the power patch `src`
+    /// sends ([`analysis::row_scale`]; only for closed scenes).
+    fn close_row(&self, src: usize, factors: &mut [f32]) {
+        let received: f64 = (self.mesh.elements.iter().zip(&self.element_area))
+            .map(|(e, &a)| a * e.v.iter().map(|&v| factors[v as usize] as f64).sum::<f64>() / 3.0)
+            .sum();
+        let scale = analysis::row_scale(self.patch_area[src], received) as f32;
+        factors.iter_mut().for_each(|f| *f *= scale);
+    }
+
+    /// Adds the overshoot of patch `src` by the ambient irradiance `ambient`
+    /// ([`crate::overshoot`]) to its unshot power before it shoots; returns the amount per
+    /// element of the patch, for [`Solver::repay_overshoot`] to take away after the shot.
+    fn borrow_overshoot(&mut self, src: usize, ambient: DVec3) -> Vec<(usize, DVec3)> {
+        let parts: Vec<usize> = (0..self.mesh.elements.len())
+            .filter(|&i| self.mesh.elements[i].patch as usize == src)
+            .collect();
+        let rho_area: Vec<(DVec3, f64)> = parts
+            .iter()
+            .map(|&i| {
+                let object = self.mesh.elements[i].object as usize;
+                let rho = self.scene.objects[object].reflectance.as_dvec3();
+                (rho, self.element_area[i])
+            })
+            .collect();
+        let amounts = overshoot::element_amounts(ambient, &rho_area);
+        for (&i, a) in parts.iter().zip(&amounts) {
+            self.element_unshot[i] += *a;
+            self.unshot[src] += *a;
+        }
+        self.stats.overshoots += 1;
+        parts.into_iter().zip(amounts).collect()
+    }
+
+    /// Takes the overshoot lent by [`Solver::borrow_overshoot`] away again: the patch's unshot
+    /// power goes negative by it, and the accounts see it.
+    fn repay_overshoot(&mut self, src: usize, borrowed: &[(usize, DVec3)]) {
+        if borrowed.is_empty() {
+            return;
+        }
+        for &(i, a) in borrowed {
+            self.element_unshot[i] -= a;
+            self.unshot[src] -= a;
+        }
+        let unshot = self.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
+        self.accounts.unshot = unshot.to_array();
     }
 
     /// How the unshot radiosity of patch `src` varies over it (its elements' unshot power over
@@ -345,12 +436,25 @@ impl<'a> Solver<'a> {
         SourceDensity::of_parts(&self.mesh.patches[src], DENSITY_GRID, &parts)
     }
 
-    fn pick_shooter(&self) -> Option<usize> {
+    /// The patch with the most power to shoot: its unshot power, plus its overshoot when
+    /// overshooting by `ambient` (so that a patch whose unshot power is its own overshoot,
+    /// negated, waits for the light that pays it back).
+    fn pick_shooter(&self, ambient: Option<DVec3>) -> Option<usize> {
+        let over = |i: usize| {
+            ambient.map_or(DVec3::ZERO, |a| {
+                let object = self.mesh.patch_object[i] as usize;
+                overshoot::patch_amount(
+                    self.scene.objects[object].reflectance.as_dvec3(),
+                    self.patch_area[i],
+                    a,
+                )
+            })
+        };
         let (best, power) = self
             .unshot
             .iter()
             .enumerate()
-            .map(|(i, u)| (i, u.abs().element_sum()))
+            .map(|(i, u)| (i, (*u + over(i)).abs().element_sum()))
             .fold((0, 0.0), |b, x| if x.1 > b.1 { x } else { b });
         (power > 0.0).then_some(best)
     }
@@ -370,13 +474,13 @@ impl<'a> Solver<'a> {
         let source = self.mesh.patches[src];
         let seed = self.config.seed ^ (self.stats.shots << 20) ^ src as u64;
         let config = self.config.form_factor;
-        let octree = &self.octree;
+        let octree = self.stages.shadow_rays.then_some(&self.octree);
         let chunks: Vec<(Vec<f32>, crate::kernels::BatchStats)> = points
             .par_chunks(256)
             .enumerate()
             .map(|(i, chunk)| {
                 let mut out = vec![0.0; chunk.len()];
-                let stats = shoot_batch_weighted(
+                let stats = shoot_batch_visibility(
                     octree,
                     &source,
                     density,
@@ -568,6 +672,23 @@ impl<'a> Solver<'a> {
         self.tally().ambient()
     }
 
+    /// [`Solver::ambient`] of the unshot power's magnitude: the same where no power is negative;
+    /// a bound on what is still to come where overshooting made some negative.
+    fn ambient_bound(&self) -> Vec3 {
+        Tally {
+            unshot: self.unshot.iter().fold(DVec3::ZERO, |s, u| s + u.abs()),
+            ..self.tally()
+        }
+        .ambient()
+    }
+
+    /// The share of shot power that comes back as unshot power, per channel: `c r` of
+    /// [`Tally::ambient`] (before the first shot, the area-weighted mean reflectance).
+    pub fn reflected_share(&self) -> DVec3 {
+        let (c, r) = self.tally().closure();
+        c * r
+    }
+
     /// The running totals the error estimate is made of.
     pub fn tally(&self) -> Tally {
         let mut rho = DVec3::ZERO;
@@ -592,7 +713,7 @@ impl<'a> Solver<'a> {
     /// only through a door, not yet reached) have `B` near 0 and so an estimate near 1, which
     /// keeps the solve going until light reaches them.
     pub fn estimated_errors(&self) -> Vec<f64> {
-        let ambient = self.ambient();
+        let ambient = self.ambient_bound();
         self.object_means()
             .into_iter()
             .zip(&self.scene.objects)
@@ -630,19 +751,15 @@ impl<'a> Solver<'a> {
             .collect()
     }
 
-    /// Returns the area-weighted RMS of `|B - B_ref|` over objects with a reference, relative to
-    /// the area-weighted mean `|B_ref|`; `None` without a reference.
+    /// Returns the error of the objects' means against the reference ([`Errors::of`]); `None`
+    /// without a reference.
+    pub fn errors(&self) -> Option<Errors> {
+        Errors::of(&self.object_means(), self.reference.as_ref()?)
+    }
+
+    /// Returns the area-weighted RMS relative error against the reference ([`Errors::rms`]).
     pub fn rms_error(&self) -> Option<f64> {
-        let reference = self.reference.as_ref()?;
-        let (mut err, mut norm, mut area) = (0.0, 0.0, 0.0);
-        for ((a, b), r) in self.object_means().into_iter().zip(reference) {
-            if let Some(r) = r {
-                err += a * (b - *r).length_squared();
-                norm += a * r.length();
-                area += a;
-            }
-        }
-        (area > 0.0 && norm > 0.0).then(|| (err / area).sqrt() / (norm / area))
+        self.errors().map(|e| e.rms)
     }
 
     /// Returns the configuration.

@@ -7,6 +7,7 @@ use glam::Vec3;
 use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::mesh::{Mesh, MeshConfig};
 use occ_radiosity::output::probe::{Probe, evaluate};
+use occ_radiosity::overshoot::Acceleration;
 use occ_radiosity::scene::{self, Scene, cornell};
 use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
 
@@ -180,12 +181,15 @@ fn overshooting_converges_with_fewer_shots() {
         mesh,
         SolverConfig {
             until: Until::Unshot(1e-3),
+            acceleration: Acceleration::Off,
             ..SolverConfig::default()
         },
     );
+    // A fixed over-relaxation factor (Gortler et al. 1993), without the ambient overshoot.
     let over = SolverConfig {
         until: Until::Unshot(1e-3),
         overshoot: 1.5,
+        acceleration: Acceleration::Off,
         ..SolverConfig::default()
     };
     let over = solve(&scene, mesh, over);

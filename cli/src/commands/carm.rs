@@ -474,8 +474,8 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
                     seconds: micros as f64 * 1e-6,
                     unshot_fraction: solver.unshot_fraction(),
                     vertices: solver.mesh.vertices.len(),
+                    errors: None,
                 });
-                solver.rms_history.push(None);
             }
             Message::Result(g, h) => {
                 let slot = solver.irradiance.get_mut(g).ok_or_else(|| {
@@ -512,9 +512,10 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
         "carm.occ returned {results} of {} sample points",
         solver.irradiance.len()
     );
-    let rms = solver.rms_error();
-    if let Some(last) = solver.rms_history.last_mut() {
-        *last = rms;
+    // carm.occ reports the irradiance once, at the end: only the last row has errors.
+    let errors = solver.errors();
+    if let Some(last) = solver.history.last_mut() {
+        last.errors = errors;
     }
     nodes.sort_by_key(|c| c[0]);
     Ok(nodes)

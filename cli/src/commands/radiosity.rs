@@ -12,7 +12,9 @@ use std::time::Instant;
 use anyhow::Context;
 use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::mesh::{Mesh, MeshConfig};
+use occ_radiosity::output::compare;
 use occ_radiosity::output::{image, plot, ply, probe, report, truth};
+use occ_radiosity::overshoot::Acceleration;
 use occ_radiosity::pathtrace::{PathTraceConfig, PathTracer};
 use occ_radiosity::scene::{self, Scene};
 use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
@@ -30,7 +32,11 @@ pub enum SolverKind {
 
 /// Flags of `occ radiosity`.
 #[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
 pub struct Args {
+    /// `compare RUN...`: overlay the convergence of earlier runs.
+    #[command(subcommand)]
+    pub command: Option<Command>,
     /// Scene (Wavefront OBJ + MTL); the embedded Cornell box when omitted.
     pub scene: Option<PathBuf>,
     /// Output folder (created if missing).
@@ -40,9 +46,26 @@ pub struct Args {
     /// estimate), unshot=FRACTION (of the emitted power), shots=N or time=SECONDS.
     #[arg(long, default_value = "error=0.01")]
     pub until: Until,
-    /// A report.json to measure the RMS error against (matched by object name).
+    /// A report.json to measure the error against (matched by object name): convergence.csv/png
+    /// then carry the RMS and largest relative error per row.
     #[arg(long)]
     pub reference: Option<PathBuf>,
+    /// Solve to a converged reference for --reference: stop at error=0.0001 by the solver's
+    /// estimate (whatever --until says), with at least 64 rays per form factor.
+    #[arg(long, conflicts_with = "solver")]
+    pub converge: bool,
+    /// Seconds between rows of convergence.csv (rows are also written at shots 1, 2, 4, 8, ...
+    /// and at the end).
+    #[arg(long, default_value_t = 0.05)]
+    pub record_every: f64,
+    /// Run every stage even where the scene does not need it (what is otherwise left out is
+    /// listed on the console and under `left_out` in report.json).
+    #[arg(long)]
+    pub all_stages: bool,
+    /// Overshooting by the ambient estimate: auto (when the scene is stiff), ambient (always)
+    /// or off.
+    #[arg(long, default_value = "auto")]
+    pub acceleration: Acceleration,
     /// Probe points, one `x y z nx ny nz` per line; writes probe.csv.
     #[arg(long)]
     pub probe: Option<PathBuf>,
@@ -123,8 +146,60 @@ pub struct Args {
     pub pt_max_bounces: u32,
 }
 
+/// Subcommands of `occ radiosity`.
+#[derive(clap::Subcommand)]
+pub enum Command {
+    /// Overlay the convergence of earlier runs (their output folders) in one plot
+    /// (compare.png) and one table (compare.md, also printed).
+    Compare(CompareArgs),
+}
+
+/// Flags of `occ radiosity compare`.
+#[derive(clap::Args)]
+pub struct CompareArgs {
+    /// Output folders of earlier runs (each holding convergence.csv).
+    #[arg(required = true)]
+    pub runs: Vec<PathBuf>,
+    /// Folder for compare.png and compare.md (created if missing).
+    #[arg(long, default_value = "radiosity-compare")]
+    pub out: PathBuf,
+}
+
+/// Runs `occ radiosity compare`.
+fn execute_compare(args: &CompareArgs) -> anyhow::Result<ExitCode> {
+    let mut runs = Vec::new();
+    for dir in &args.runs {
+        let path = dir.join("convergence.csv");
+        let rows = compare::parse_csv(&path.display().to_string(), &read(&path)?)?;
+        let name = dir
+            .file_name()
+            .map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into());
+        runs.push(compare::Run { name, rows });
+    }
+    let out = &args.out;
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let table = compare::table(&runs);
+    let labels = plot::register_system_font();
+    let png =
+        compare::compare_png(&runs, labels).or_else(|_| compare::compare_png(&runs, false))?;
+    for (file, bytes) in [("compare.md", table.as_bytes()), ("compare.png", &png)] {
+        std::fs::write(out.join(file), bytes)
+            .with_context(|| format!("cannot write {}", out.join(file).display()))?;
+    }
+    print!("{table}");
+    println!(
+        "compared {} runs; compare.png and compare.md in {}",
+        runs.len(),
+        out.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
 /// Runs `occ radiosity`.
 pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
+    if let Some(Command::Compare(compare)) = &args.command {
+        return execute_compare(compare);
+    }
     check_args(&args)?;
     let mut transport = super::transport::Chosen::new(args.transport)?;
     // Under MPI every rank loads and meshes the scene (the same way) and runs its share of the
@@ -194,6 +269,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         solver_config(&args, diag, mesh_config.element_size),
     );
     let octree_time = t2.elapsed().as_secs_f64();
+    print_stages(&solver);
     if let Some(path) = &args.reference {
         let text = read(path)?;
         let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
@@ -224,7 +300,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     let t3 = Instant::now();
     let network = match args.solver {
         SolverKind::Reference => {
-            progress.stage("shooting", &format!("until {:?}", args.until));
+            progress.stage("shooting", &format!("until {:?}", solver.config().until));
             solve(&mut solver, &progress);
             None
         }
@@ -345,6 +421,21 @@ fn print_left_out(name: &str, scene: &Scene, mesh: &Mesh, diag: f32) {
             "note: {name}: {n} {what} (weld distance {:.3e}, 1e-5 of the diagonal)",
             1e-5 * diag
         );
+    }
+}
+
+/// Says in one line which stages the scene does not need and are left out (and how to force
+/// them back on), and what the analysis added.
+fn print_stages(solver: &Solver) {
+    let left_out = solver.stages.left_out();
+    if !left_out.is_empty() {
+        eprintln!(
+            "note: left out: {} (--all-stages runs them)",
+            left_out.join("; ")
+        );
+    }
+    for added in solver.stages.added() {
+        eprintln!("note: {added}");
     }
 }
 
@@ -497,6 +588,10 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
     );
     anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
     anyhow::ensure!(
+        args.record_every.is_finite() && args.record_every >= 0.0,
+        "--record-every must be a number of seconds >= 0"
+    );
+    anyhow::ensure!(
         args.program.is_none() || matches!(args.solver, SolverKind::Carm),
         "--program names a node program for --solver carm"
     );
@@ -511,6 +606,12 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The estimated error `--converge` solves to.
+const CONVERGED: f64 = 1e-4;
+
+/// The fewest rays per form factor `--converge` uses.
+const CONVERGED_RAYS: u32 = 64;
+
 fn solver_config(args: &Args, diag: f32, element_size: f32) -> SolverConfig {
     let adapt = (!args.no_adapt).then_some(AdaptConfig {
         difference: args.adapt_difference,
@@ -522,14 +623,25 @@ fn solver_config(args: &Args, diag: f32, element_size: f32) -> SolverConfig {
     });
     SolverConfig {
         form_factor: FormFactorConfig {
-            rays: args.rays,
+            rays: if args.converge {
+                args.rays.max(CONVERGED_RAYS)
+            } else {
+                args.rays
+            },
             offset: diag * 1e-6,
             ..FormFactorConfig::default()
         },
         adapt,
         overshoot: args.overshoot,
-        until: args.until,
+        acceleration: args.acceleration,
+        until: if args.converge {
+            Until::Error(CONVERGED)
+        } else {
+            args.until
+        },
         seed: args.seed,
+        all_stages: args.all_stages,
+        record_every: args.record_every,
         ..SolverConfig::default()
     }
 }
@@ -603,13 +715,16 @@ fn write_outputs(
         "report.json",
         serde_json::to_string_pretty(&json)?.as_bytes(),
     )?;
+    let names: Vec<String> = (solver.scene.objects.iter())
+        .map(|o| o.name.clone())
+        .collect();
     write(
         "convergence.csv",
-        plot::convergence_csv(&solver.history, &solver.rms_history).as_bytes(),
+        plot::convergence_csv(&solver.history, &names).as_bytes(),
     )?;
     let labels = plot::register_system_font();
-    let png = plot::convergence_png(&solver.history, &solver.rms_history, labels)
-        .or_else(|_| plot::convergence_png(&solver.history, &solver.rms_history, false))?;
+    let png = plot::convergence_png(&solver.history, labels)
+        .or_else(|_| plot::convergence_png(&solver.history, false))?;
     write("convergence.png", &png)?;
     write(
         "image.png",

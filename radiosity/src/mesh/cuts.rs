@@ -8,6 +8,9 @@
 //! - A parallel face lying close in front (between `tol` and `gap`; a light hung a hair below
 //!   a ceiling, a book on a table) covers it: the face is cut along the outline of the cover
 //!   (its edges not shared with a neighbour of its own plane) and the covered pieces are hidden.
+//!   Two faces facing the same way within `tol` of one plane (a rug laid on a floor, a panel
+//!   1e-6 above it) would both receive the same light: the one in front, or the later in the
+//!   file when neither is (as a decal is drawn over what is under it), covers the other.
 
 use glam::{DVec2, DVec3};
 use rustc_hash::FxHashMap;
@@ -97,7 +100,7 @@ impl Context<'_> {
             let w = self.corners(g);
             let h = w.map(|p| frame.height(p));
             if face.normal.dot(other.normal).abs() > PARALLEL {
-                if h.iter().all(|&x| x > self.tol && x <= self.gap) {
+                if self.covers(f, g, h, &frame) {
                     covers.push(w.map(|p| frame.plane_point(p)));
                     self.outline(g, &frame, &mut cuts);
                 }
@@ -127,6 +130,27 @@ impl Context<'_> {
             }
         }
         (pieces, count)
+    }
+
+    /// Whether the parallel face `g`, its corners at heights `h` over the plane of face `f`
+    /// (`frame`), covers `f`: it lies close in front, or it faces the same way within `tol` of
+    /// the plane, overlaps `f` (not merely touches it, as the next triangle of the same surface
+    /// does) and is in front (by more than rounding) or, level with it, later in the file.
+    fn covers(&self, f: usize, g: usize, h: [f64; 3], frame: &Frame) -> bool {
+        if h.iter().all(|&x| x > self.tol && x <= self.gap) {
+            return true;
+        }
+        let same_way = self.input.faces[f].normal.dot(self.input.faces[g].normal) > PARALLEL;
+        if !same_way || h.iter().any(|&x| x.abs() > self.tol) {
+            return false;
+        }
+        let flat = |t: [DVec3; 3]| t.map(|p| frame.plane_point(p));
+        if !overlap(flat(self.corners(f)), flat(self.corners(g)), self.tol) {
+            return false;
+        }
+        let mean = (h[0] + h[1] + h[2]) / 3.0;
+        let level = 1e-3 * self.tol;
+        mean > level || (mean.abs() <= level && g > f)
     }
 
     /// Adds the edges of face `g` that bound its surface (no neighbour of its plane shares
@@ -196,4 +220,28 @@ fn meet(frame: &Frame, w: [DVec3; 3], h: [f64; 3], tol: f64) -> Option<(piece::P
         return None;
     }
     Some((frame.project(pts[0]), frame.project(pts[1])))
+}
+
+/// Whether two triangles of one plane overlap by more than `tol` (separating axes: an edge of
+/// either along which they are apart, or touch within `tol`, separates them).
+fn overlap(a: [DVec2; 3], b: [DVec2; 3], tol: f64) -> bool {
+    let apart = |t: [DVec2; 3], u: [DVec2; 3]| {
+        (0..3).any(|i| {
+            let e = t[(i + 1) % 3] - t[i];
+            let n = DVec2::new(-e.y, e.x).normalize_or_zero();
+            if n == DVec2::ZERO {
+                return false;
+            }
+            let range = |p: [DVec2; 3]| {
+                p.iter()
+                    .map(|q| n.dot(*q))
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                        (lo.min(x), hi.max(x))
+                    })
+            };
+            let ((t0, t1), (u0, u1)) = (range(t), range(u));
+            t1 <= u0 + tol || u1 <= t0 + tol
+        })
+    };
+    !apart(a, b) && !apart(b, a)
 }

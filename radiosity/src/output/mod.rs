@@ -1,7 +1,8 @@
 //! The outputs of a solve, as bytes or text (the caller writes the files): `report.json`,
 //! `convergence.csv`/`.png`, `image.png`, `solution.ply` and `probe.csv`, and the path-traced
-//! truth (`pathtrace.json`).
+//! truth (`pathtrace.json`); and the comparison of several runs' records (`compare`).
 
+pub mod compare;
 pub mod image;
 pub mod plot;
 pub mod ply;
@@ -24,6 +25,16 @@ pub enum OutputError {
     Reference {
         /// File name.
         file: String,
+        /// What was wrong.
+        message: String,
+    },
+    /// Occurs when a convergence record is malformed (`occ radiosity compare`).
+    #[error("{file}:{line}: {message}")]
+    Convergence {
+        /// File name.
+        file: String,
+        /// 1-based line number.
+        line: usize,
         /// What was wrong.
         message: String,
     },

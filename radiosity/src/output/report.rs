@@ -87,8 +87,13 @@ pub struct Report {
     pub solver: String,
     /// Scene summary.
     pub scene: SceneSummary,
-    /// What was left out and why.
+    /// What was left out and why: statements of the scene file the loader skipped, and stages
+    /// of the solver the scene does not need ([`crate::analysis::Stages::left_out`]).
     pub left_out: Vec<String>,
+    /// What the scene analysis found ([`crate::analysis`]).
+    pub analysis: crate::analysis::SceneAnalysis,
+    /// The stages the solve ran.
+    pub stages: crate::analysis::Stages,
     /// Per object.
     pub objects: Vec<ObjectReport>,
     /// Energy totals.
@@ -101,8 +106,11 @@ pub struct Report {
     pub nodes: Vec<NodeReport>,
     /// Per-link statistics (none for the sequential solver).
     pub links: Vec<serde_json::Value>,
-    /// Final relative RMS error against `--reference`, if given.
+    /// Final area-weighted RMS relative error against the reference (`--reference`,
+    /// `--reference-mc`), if given ([`crate::convergence::Errors`]).
     pub rms_error: Option<f64>,
+    /// Final largest relative error of any object in any channel against the reference.
+    pub max_error: Option<f64>,
     /// Each object's error against the path-traced truth (`--reference-mc`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub truth: Option<Vec<super::truth::ObjectError>>,
@@ -122,6 +130,9 @@ pub fn build(solver: &Solver, file: &str, timings: Timings) -> Report {
         })
         .collect();
     let a = solver.accounts;
+    let errors = solver.errors();
+    let mut left_out = scene.left_out.clone();
+    left_out.extend(solver.stages.left_out());
     Report {
         solver: "reference".into(),
         scene: SceneSummary {
@@ -134,7 +145,9 @@ pub fn build(solver: &Solver, file: &str, timings: Timings) -> Report {
             final_elements: solver.mesh.elements.len(),
             octree: solver.octree.stats(),
         },
-        left_out: scene.left_out.clone(),
+        left_out,
+        analysis: solver.analysis,
+        stages: solver.stages,
         objects,
         totals: Totals {
             emitted: a.emitted,
@@ -151,7 +164,8 @@ pub fn build(solver: &Solver, file: &str, timings: Timings) -> Report {
             stats: solver.stats,
         }],
         links: Vec::new(),
-        rms_error: solver.rms_error(),
+        rms_error: errors.as_ref().map(|e| e.rms),
+        max_error: errors.map(|e| e.max),
         truth: None,
     }
 }
