@@ -166,7 +166,11 @@ fn carm_walks_a_many_voxel_octree_as_the_reference_solver() {
         "--image-size",
         "16",
     ];
-    let reference = radiosity_with(&scratch("carm-lamp-reference"), &settings, &[]);
+    let reference = radiosity_with(
+        &scratch("carm-lamp-reference"),
+        &settings,
+        &["--acceleration", "off"],
+    );
     let leaves = reference["scene"]["octree"]["leaves"]
         .as_u64()
         .expect("leaves");
@@ -201,7 +205,11 @@ fn carm_stops_on_the_error_estimate_where_the_reference_solver_does() {
     let until = ["--until", "error=0.05"];
     let reference = radiosity(
         &scratch("carm-error-reference"),
-        &[&["--solver", "reference"][..], &until].concat(),
+        &[
+            &["--solver", "reference", "--acceleration", "off"][..],
+            &until,
+        ]
+        .concat(),
     );
     let carm = radiosity(
         &scratch("carm-error"),
@@ -235,6 +243,16 @@ fn carm_refuses_what_it_cannot_do_clearly() {
         (
             &["--solver", "carm", "--no-adapt", "--until", "time=1"][..],
             "takes --until error=F, unshot=F or shots=N",
+        ),
+        (
+            &[
+                "--solver",
+                "carm",
+                "--no-adapt",
+                "--acceleration",
+                "ambient",
+            ][..],
+            "does not overshoot by the ambient estimate yet",
         ),
         (
             &[

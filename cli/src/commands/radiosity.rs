@@ -315,6 +315,12 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                     args.nodes, args.until
                 ),
             );
+            if args.acceleration == Acceleration::Auto && reports {
+                eprintln!(
+                    "note: carm.occ shoots without the ambient overshoot the reference solver \
+                     chooses for stiff scenes (--overshoot F sets a fixed factor)"
+                );
+            }
             let program = match &args.program {
                 Some(path) => {
                     let text = std::fs::read_to_string(path)
@@ -582,6 +588,11 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
             "--solver carm takes --until error=F, unshot=F or shots=N"
         );
     }
+    anyhow::ensure!(
+        !matches!(args.solver, SolverKind::Carm) || args.acceleration != Acceleration::Ambient,
+        "--solver carm does not overshoot by the ambient estimate yet: give --overshoot F for a \
+         fixed factor"
+    );
     anyhow::ensure!(
         args.transport == super::transport::Kind::Inproc || matches!(args.solver, SolverKind::Carm),
         "--transport mpi spreads carm.occ's nodes: give --solver carm"
