@@ -281,7 +281,6 @@ impl Mesh {
         mesh.stats.hidden_pieces += surface::hide_enclosed(&mesh, &tags, &mut hidden);
         mesh.stats.split_points = surface::split_points(&mut mesh, &tags, &hidden);
         drop((tags, hidden));
-        mesh.drop_unused_vertices();
         clock.lap("hide and split", &mut laps);
         let floor = (tol * 10.0) as f32;
         mesh.subdivide(config.patch_size.max(floor));
@@ -402,7 +401,10 @@ impl Mesh {
             .collect();
         drop(pieces);
         let mut tags = surface::EdgeTags::default();
-        let mut hidden = Vec::new();
+        let total: usize = done.iter().map(|d| d.elements.len()).sum();
+        let mut hidden = Vec::with_capacity(total);
+        self.elements.reserve(total);
+        self.edges.reserve(total * 3 / 2);
         for d in done {
             self.stats.t_junction_splits += d.inserted;
             for (e, h) in d.elements.into_iter().zip(d.hidden) {
@@ -513,8 +515,8 @@ impl Mesh {
         on.into_iter().map(|(_, v)| v).collect()
     }
 
-    /// Removes the vertices no element uses (left by triangles that welding collapsed) and
-    /// renumbers the rest in order.
+    /// Removes the vertices no element uses (left by triangles that welding collapsed and by
+    /// point splitting), renumbers the rest in order and rebuilds the edge map.
     fn drop_unused_vertices(&mut self) {
         let mut used = vec![false; self.vertices.len()];
         for e in &self.elements {
@@ -523,20 +525,19 @@ impl Mesh {
             }
         }
         let mut new_index = vec![u32::MAX; self.vertices.len()];
-        let mut kept = Vec::new();
-        for (i, v) in self.vertices.iter().enumerate() {
+        let mut kept = 0;
+        for i in 0..self.vertices.len() {
             if used[i] {
-                new_index[i] = kept.len() as u32;
-                kept.push(*v);
+                new_index[i] = kept as u32;
+                self.vertices[kept] = self.vertices[i];
+                kept += 1;
             }
         }
-        self.vertices = kept;
-        let elements = std::mem::take(&mut self.elements);
-        self.edges.clear();
-        for mut e in elements {
+        self.vertices.truncate(kept);
+        for e in &mut self.elements {
             e.v = e.v.map(|v| new_index[v as usize]);
-            self.push_element(e);
         }
+        self.rebuild_edges();
     }
 
     fn push_element(&mut self, e: Element) -> u32 {
@@ -554,6 +555,8 @@ impl Mesh {
     /// Rebuilds the edge map from the elements.
     fn rebuild_edges(&mut self) {
         self.edges.clear();
+        // About three edges for every two elements in a connected mesh.
+        self.edges.reserve(self.elements.len() * 3 / 2);
         for (i, e) in self.elements.iter().enumerate() {
             for k in 0..3 {
                 self.edges
