@@ -152,6 +152,41 @@ impl SourceDensity {
         Some(SourceDensity { g, cells })
     }
 
+    /// The density of a patch `src` made of `parts`, each a triangle of it with its unshot
+    /// radiosity (unshot power over area, channels summed): at each grid cell, the part that
+    /// contains the cell's centre (the nearest, for centres on shared edges). `None` with fewer
+    /// than two parts, or as [`SourceDensity::new`]. The solver and the `RAD.SOURCE.DENSITY`
+    /// intrinsic both tabulate a shooting patch with this.
+    pub fn of_parts(src: &Tri, g: u32, parts: &[(Tri, f32)]) -> Option<SourceDensity> {
+        if parts.len() < 2 {
+            return None;
+        }
+        SourceDensity::new(src, g, |x| {
+            parts
+                .iter()
+                .map(|(t, d)| ((t.closest_point(x) - x).length_squared(), *d))
+                .fold((f32::MAX, 0.0), |b, c| if c.0 < b.0 { c } else { b })
+                .1
+        })
+    }
+
+    /// A density from its `g × g` cells as [`SourceDensity::cells`] lists them; `None` unless
+    /// there are `g²` cells for some `g ≥ 1`, each finite and non-negative.
+    pub fn from_cells(cells: &[f32]) -> Option<SourceDensity> {
+        let g = (cells.len() as f64).sqrt().round() as u32;
+        let fits = g >= 1 && (g * g) as usize == cells.len();
+        let valid = cells.iter().all(|c| c.is_finite() && *c >= 0.0);
+        (fits && valid).then(|| SourceDensity {
+            g,
+            cells: cells.to_vec(),
+        })
+    }
+
+    /// The cells, row by row (`u` major), each the density at its centre over the mean.
+    pub fn cells(&self) -> &[f32] {
+        &self.cells
+    }
+
     /// The relative density at `(u, v)` in [0,1)².
     pub fn at(&self, u: f32, v: f32) -> f32 {
         let cell = |x: f32| ((x * self.g as f32) as u32).min(self.g - 1);

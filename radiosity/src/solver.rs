@@ -27,7 +27,7 @@ use crate::scene::Scene;
 /// Cells per side of the grid that tabulates a shooting patch's unshot radiosity
 /// ([`SourceDensity`]): finer than the elements of a patch at the default sizes (a patch is
 /// about five elements across), so each element's share is seen.
-const DENSITY_GRID: u32 = 24;
+pub const DENSITY_GRID: u32 = 24;
 
 /// `Until::Error(f)` stops when the estimated error is at most `ERROR_MARGIN × f`. The estimate
 /// spreads the unshot power evenly; in a room lit only through a doorway, which gets less than
@@ -347,18 +347,7 @@ impl<'a> Solver<'a> {
             .filter(|((e, _), _)| e.patch as usize == src)
             .map(|((e, u), &a)| (self.mesh.tri(e), (u.element_sum() / a.max(1e-300)) as f32))
             .collect();
-        if parts.len() < 2 {
-            return None;
-        }
-        let patch = self.mesh.patches[src];
-        SourceDensity::new(&patch, DENSITY_GRID, |x| {
-            // The element containing x (the nearest, for points on shared edges).
-            parts
-                .iter()
-                .map(|(t, d)| ((t.closest_point(x) - x).length_squared(), *d))
-                .fold((f32::MAX, 0.0), |b, c| if c.0 < b.0 { c } else { b })
-                .1
-        })
+        SourceDensity::of_parts(&self.mesh.patches[src], DENSITY_GRID, &parts)
     }
 
     fn pick_shooter(&self) -> Option<usize> {
