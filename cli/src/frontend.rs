@@ -13,7 +13,8 @@
 //!
 //! Include search order: the including file's folder, then the `-I` folders, then `stdlib/`
 //! (from `OCC_STDLIB`, else the `stdlib/` folder of the workspace the executable was built in or
-//! sits in).
+//! sits in), then the standard library built into the binary ([`crate::stdlib`]). A file not
+//! found is reported with every place looked in.
 
 use occ_grammar::diagnostic::Diagnostic;
 use occ_grammar::preprocess::Loader;
@@ -153,15 +154,46 @@ impl FsLoader {
 
 impl Loader for FsLoader {
     fn load(&mut self, name: &str, from: &str) -> Option<(String, String)> {
-        let here = Path::new(from).parent().map(Path::to_path_buf);
-        let found = here
+        let found = self
+            .folders(from)
             .into_iter()
-            .chain(self.dirs.iter().cloned())
             .map(|dir| dir.join(name))
-            .find(|candidate| candidate.is_file())?;
+            .find(|candidate| candidate.is_file());
+        let Some(found) = found else {
+            let text = crate::stdlib::get(name)?;
+            return Some((
+                format!("{}/{name}", crate::stdlib::PREFIX),
+                text.to_string(),
+            ));
+        };
         let bytes = std::fs::read(&found).ok()?;
         let text = String::from_utf8_lossy(&bytes).into_owned();
         Some((found.display().to_string(), text))
+    }
+
+    fn searched(&self, from: &str) -> Vec<String> {
+        let mut places: Vec<String> = self
+            .folders(from)
+            .iter()
+            .map(|dir| {
+                if dir.as_os_str().is_empty() {
+                    "the working folder".to_string()
+                } else {
+                    dir.display().to_string()
+                }
+            })
+            .collect();
+        places.push("the standard library built into occ".into());
+        places
+    }
+}
+
+impl FsLoader {
+    /// The folders searched for a file included from `from`, in order: its folder, then the
+    /// `-I` folders and `stdlib/`.
+    fn folders(&self, from: &str) -> Vec<PathBuf> {
+        let here = Path::new(from).parent().map(Path::to_path_buf);
+        here.into_iter().chain(self.dirs.iter().cloned()).collect()
     }
 }
 

@@ -5,6 +5,7 @@
 
 mod commands;
 mod frontend;
+mod stdlib;
 mod testsuite;
 
 use std::process::ExitCode;

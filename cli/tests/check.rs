@@ -52,3 +52,60 @@ fn a_missing_include_is_a_labelled_diagnostic() {
     assert!(stderr.contains("prog.occ:1:"), "{stderr}");
     assert!(stderr.contains("no-such-file.inc"), "{stderr}");
 }
+
+/// An `#INCLUDE` that is found nowhere names every place looked in: the including file's folder,
+/// each `-I` folder, and the standard library.
+#[test]
+fn a_missing_include_names_every_folder_searched() {
+    let dir = std::env::temp_dir().join(format!("occ-search-{}", std::process::id()));
+    let extra = dir.join("extra");
+    fs::create_dir_all(&extra).expect("temporary folders");
+    let file = dir.join("prog.occ");
+    fs::write(&file, "#INCLUDE \"nowhere.inc\"\nPROC p ()\n  SKIP\n:\n").expect("program");
+    let output = Command::new(env!("CARGO_BIN_EXE_occ"))
+        .arg("check")
+        .arg(&file)
+        .arg("-I")
+        .arg(&extra)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the occ binary runs");
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    let _ = fs::remove_dir_all(&dir);
+    assert!(!output.status.success(), "{stderr}");
+    // miette wraps long help lines: compare without line breaks.
+    let flat: String = stderr.split_whitespace().collect::<Vec<_>>().join(" ");
+    for place in [
+        dir.display().to_string(),
+        extra.display().to_string(),
+        "the standard library built into occ".into(),
+    ] {
+        assert!(flat.contains(&place), "missing `{place}` in\n{stderr}");
+    }
+}
+
+/// The standard library is built into the binary: a program that uses the course library
+/// checks from a working folder with no `stdlib/` anywhere near it, and with the folder the
+/// binary would otherwise read (`OCC_STDLIB`) empty.
+#[test]
+fn the_stdlib_is_found_with_no_stdlib_folder() {
+    let dir = std::env::temp_dir().join(format!("occ-embedded-{}", std::process::id()));
+    let empty = dir.join("empty");
+    fs::create_dir_all(&empty).expect("temporary folders");
+    fs::write(
+        dir.join("hello.occ"),
+        "#INCLUDE \"course.module\"\nPROC hello (CHAN BYTE keyboard?, screen!, error!)\n  out.string (\"hi*n\", 0, screen!)\n:\n",
+    )
+    .expect("program");
+    let output = Command::new(env!("CARGO_BIN_EXE_occ"))
+        .current_dir(&dir)
+        .arg("check")
+        .arg("hello.occ")
+        .env("OCC_STDLIB", &empty)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the occ binary runs");
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    let _ = fs::remove_dir_all(&dir);
+    assert!(output.status.success(), "{stderr}");
+}

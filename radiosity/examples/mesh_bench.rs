@@ -46,4 +46,10 @@ fn main() {
         before as f64 / 1024.0,
         (peak.saturating_sub(before) * 1024) as f64 / n as f64
     );
+    let stages: Vec<String> = mesh
+        .stage_seconds
+        .iter()
+        .map(|s| format!("{} {:.2}/{:.2}", s.name, s.wall, s.cpu))
+        .collect();
+    println!("  stages (wall/cpu s): {}", stages.join(", "));
 }

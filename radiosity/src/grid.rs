@@ -9,35 +9,73 @@
 
 use glam::{DVec3, IVec3, Vec3};
 use rustc_hash::FxHashMap;
+use smallvec::SmallVec;
 
 /// Boxes spanning more cells than this are kept in a list that every query returns, and query
 /// boxes spanning more cells return every item.
 const MAX_CELLS: i64 = 512;
 
-/// The grid. Items are `u32` ids.
+/// The grid, built once over a list of boxes; item `i` is the `i`th box. Each occupied cell
+/// holds a run of one shared id list (no allocation per cell).
 #[derive(Clone, Debug)]
 pub struct BoxGrid {
     inv_cell: f32,
-    cells: FxHashMap<IVec3, Vec<u32>>,
+    /// Each occupied cell's run `(start, len)` in `ids`.
+    cells: FxHashMap<IVec3, (u32, u32)>,
+    ids: Vec<u32>,
     /// Items too large to enter cell by cell.
     large: Vec<u32>,
-    /// Every id inserted, for queries too large to answer cell by cell.
-    all: Vec<u32>,
+    /// The number of items.
+    count: u32,
 }
 
 impl BoxGrid {
-    /// An empty grid with cells `cell` wide (at least 1e-30).
-    pub fn new(cell: f32) -> BoxGrid {
-        BoxGrid {
+    /// A grid with cells `cell` wide (at least 1e-30) over `n` items, item `i` with box
+    /// `bounds(i)`.
+    pub fn build(cell: f32, n: usize, bounds: impl Fn(usize) -> (Vec3, Vec3)) -> BoxGrid {
+        let mut grid = BoxGrid {
             inv_cell: 1.0 / cell.max(1e-30),
             cells: FxHashMap::default(),
+            ids: Vec::new(),
             large: Vec::new(),
-            all: Vec::new(),
+            count: n as u32,
+        };
+        // Count the items of each cell, give each cell its run, then fill the runs in id order
+        // (so each cell lists its items in increasing order).
+        let spans: Vec<Option<(IVec3, IVec3)>> = (0..n)
+            .map(|i| {
+                let (lo, hi) = bounds(i);
+                grid.span(lo, hi)
+            })
+            .collect();
+        for (i, span) in spans.iter().enumerate() {
+            match span {
+                Some((a, b)) => each_cell(*a, *b, |c| grid.cells.entry(c).or_insert((0, 0)).1 += 1),
+                None => grid.large.push(i as u32),
+            }
         }
+        let mut start = 0u32;
+        for run in grid.cells.values_mut() {
+            let len = run.1;
+            *run = (start, 0);
+            start += len;
+        }
+        grid.ids = vec![0; start as usize];
+        for (i, span) in spans.iter().enumerate() {
+            if let Some((a, b)) = span {
+                each_cell(*a, *b, |c| {
+                    if let Some(run) = grid.cells.get_mut(&c) {
+                        grid.ids[(run.0 + run.1) as usize] = i as u32;
+                        run.1 += 1;
+                    }
+                });
+            }
+        }
+        grid
     }
 
     /// A grid whose cell is the median largest extent of `boxes` (so a typical box meets a few
-    /// cells), with every box inserted under its index.
+    /// cells), over `boxes`.
     pub fn over(boxes: &[(Vec3, Vec3)]) -> BoxGrid {
         let mut extents: Vec<f32> = boxes
             .iter()
@@ -49,11 +87,7 @@ impl BoxGrid {
             let mid = extents.len() / 2;
             *extents.select_nth_unstable_by(mid, f32::total_cmp).1
         };
-        let mut grid = BoxGrid::new(cell);
-        for (i, (lo, hi)) in boxes.iter().enumerate() {
-            grid.insert(i as u32, *lo, *hi);
-        }
-        grid
+        BoxGrid::build(cell, boxes.len(), |i| boxes[i])
     }
 
     /// The cells a box covers, or `None` when that is more than [`MAX_CELLS`] (or not finite).
@@ -68,20 +102,17 @@ impl BoxGrid {
         (n.x * n.y * n.z <= MAX_CELLS).then_some((a, b))
     }
 
-    /// Inserts item `id` with box `lo..hi`.
-    pub fn insert(&mut self, id: u32, lo: Vec3, hi: Vec3) {
-        self.all.push(id);
-        let Some((a, b)) = self.span(lo, hi) else {
-            self.large.push(id);
-            return;
-        };
-        for z in a.z..=b.z {
-            for y in a.y..=b.y {
-                for x in a.x..=b.x {
-                    self.cells.entry(IVec3::new(x, y, z)).or_default().push(id);
-                }
-            }
-        }
+    /// The items of a cell.
+    fn cell(&self, c: &IVec3) -> &[u32] {
+        self.cells.get(c).map_or(&[], |&(start, len)| {
+            &self.ids[start as usize..(start + len) as usize]
+        })
+    }
+
+    /// Puts every item into `out`.
+    fn all(&self, out: &mut Vec<u32>) {
+        out.clear();
+        out.extend(0..self.count);
     }
 
     /// Puts into `out` (cleared first, sorted, deduplicated) every item whose box may meet
@@ -89,7 +120,7 @@ impl BoxGrid {
     pub fn query_box(&self, lo: Vec3, hi: Vec3, out: &mut Vec<u32>) {
         out.clear();
         if !self.collect_box(lo, hi, out) {
-            out.clone_from(&self.all);
+            self.all(out);
         }
         out.extend_from_slice(&self.large);
         finish(out);
@@ -99,19 +130,34 @@ impl BoxGrid {
     /// within `radius` of the segment `p..q`. The segment is walked in steps of half a cell, so
     /// a long diagonal segment touches the cells along it rather than its whole bounding box.
     pub fn query_segment(&self, p: Vec3, q: Vec3, radius: f32, out: &mut Vec<u32>) {
+        self.query_segment_points(p, q, radius, out);
+        finish(out);
+    }
+
+    /// [`BoxGrid::query_segment`] for a grid of points (items inserted with `lo == hi`, so each
+    /// in one cell): every item near the segment once, in no particular order but the same
+    /// for the same query (and the large list, which a grid of points does not have).
+    pub fn query_segment_points(&self, p: Vec3, q: Vec3, radius: f32, out: &mut Vec<u32>) {
         out.clear();
         let cell = 1.0 / self.inv_cell;
         let steps = ((q - p).length() / (0.5 * cell)).ceil().clamp(1.0, 1e6) as usize;
         let half = Vec3::splat(0.5 * (q - p).length() / steps as f32 + radius);
+        // Each cell once: the boxes of successive steps overlap.
+        let mut cells: SmallVec<[IVec3; 32]> = SmallVec::new();
         for k in 0..steps {
             let c = p.lerp(q, (k as f32 + 0.5) / steps as f32);
-            if !self.collect_box(c - half, c + half, out) {
-                out.clone_from(&self.all);
-                break;
-            }
+            let Some((a, b)) = self.span(c - half, c + half) else {
+                self.all(out);
+                return;
+            };
+            each_cell(a, b, |c| cells.push(c));
+        }
+        cells.sort_unstable_by_key(|c| (c.z, c.y, c.x));
+        cells.dedup();
+        for c in &cells {
+            out.extend_from_slice(self.cell(c));
         }
         out.extend_from_slice(&self.large);
-        finish(out);
     }
 
     /// Appends the items of the cells `lo..hi` covers; false (appending nothing) when that is
@@ -120,27 +166,35 @@ impl BoxGrid {
         let Some((a, b)) = self.span(lo, hi) else {
             return false;
         };
-        for z in a.z..=b.z {
-            for y in a.y..=b.y {
-                for x in a.x..=b.x {
-                    if let Some(ids) = self.cells.get(&IVec3::new(x, y, z)) {
-                        out.extend_from_slice(ids);
-                    }
-                }
+        each_cell(a, b, |c| out.extend_from_slice(self.cell(&c)));
+        true
+    }
+}
+
+/// Calls `f` on every cell of the block `a..=b`.
+fn each_cell(a: IVec3, b: IVec3, mut f: impl FnMut(IVec3)) {
+    for z in a.z..=b.z {
+        for y in a.y..=b.y {
+            for x in a.x..=b.x {
+                f(IVec3::new(x, y, z));
             }
         }
-        true
     }
 }
 
 /// Points welded within a distance: [`PointIndex::find`] returns a point already inserted
 /// within `tol` of the query (and accepted by the caller's test), whatever cell boundary lies
-/// between them. Cells are `2 tol` wide and a query looks at the 27 cells around it.
+/// between them. Cells are `2 tol` wide and a query looks at the (at most 8) cells within `tol`.
 #[derive(Clone, Debug, Default)]
 pub struct PointIndex {
     inv_cell: f64,
+    tol: f64,
     tol2: f64,
-    cells: FxHashMap<[i64; 3], Vec<u32>>,
+    /// The last id inserted in each cell; `next` chains to the one before (no allocation per
+    /// cell).
+    cells: FxHashMap<[i64; 3], u32>,
+    /// By id: the id inserted in the same cell before it, or `u32::MAX`.
+    next: Vec<u32>,
 }
 
 impl PointIndex {
@@ -148,8 +202,10 @@ impl PointIndex {
     pub fn new(tol: f64) -> PointIndex {
         PointIndex {
             inv_cell: 0.5 / tol,
+            tol,
             tol2: tol * tol,
             cells: FxHashMap::default(),
+            next: Vec::new(),
         }
     }
 
@@ -157,27 +213,27 @@ impl PointIndex {
         (p * self.inv_cell).floor().as_i64vec3().to_array()
     }
 
-    /// Returns the first id (in insertion order within a cell) whose point `at(id)` lies within
-    /// `tol` of `p` and which `accept` takes.
+    /// Returns the id whose point `at(id)` lies nearest `p` and within `tol` of it (the least
+    /// id among equally near ones) of those `accept` takes.
     pub fn find(
         &self,
         p: DVec3,
         at: impl Fn(u32) -> DVec3,
         accept: impl Fn(u32) -> bool,
     ) -> Option<u32> {
-        let k = self.key(p);
+        // Cells are `2 tol` wide, so the points within `tol` lie in at most two per axis.
+        let (lo, hi) = (self.key(p - self.tol), self.key(p + self.tol));
         let mut best: Option<(f64, u32)> = None;
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let Some(ids) = self.cells.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
-                        continue;
-                    };
-                    for &id in ids {
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let mut id = self.cells.get(&[x, y, z]).copied().unwrap_or(u32::MAX);
+                    while id != u32::MAX {
                         let d2 = (at(id) - p).length_squared();
                         if d2 <= self.tol2 && best.is_none_or(|b| (d2, id) < b) && accept(id) {
                             best = Some((d2, id));
                         }
+                        id = self.next[id as usize];
                     }
                 }
             }
@@ -187,7 +243,11 @@ impl PointIndex {
 
     /// Inserts point `p` under `id`.
     pub fn insert(&mut self, id: u32, p: DVec3) {
-        self.cells.entry(self.key(p)).or_default().push(id);
+        if self.next.len() <= id as usize {
+            self.next.resize(id as usize + 1, u32::MAX);
+        }
+        let key = self.key(p);
+        self.next[id as usize] = self.cells.insert(key, id).unwrap_or(u32::MAX);
     }
 }
 

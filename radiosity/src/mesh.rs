@@ -165,6 +165,58 @@ pub struct Mesh {
     edges: EdgeMap,
     /// What meshing did.
     pub stats: MeshStats,
+    /// Each meshing step with its wall-clock and processor seconds (all threads; zero where
+    /// the system does not say), in order: for benchmarks, never in reports, which must not
+    /// depend on the machine.
+    pub stage_seconds: Vec<StageTime>,
+}
+
+/// The time one meshing step took.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StageTime {
+    /// The step.
+    pub name: &'static str,
+    /// Wall-clock seconds.
+    pub wall: f64,
+    /// Processor seconds of the whole process (user and system, all threads).
+    pub cpu: f64,
+}
+
+/// Records the times of successive steps.
+struct Stopwatch(std::time::Instant, f64);
+
+impl Stopwatch {
+    fn start() -> Stopwatch {
+        Stopwatch(std::time::Instant::now(), process_cpu_seconds())
+    }
+
+    /// Ends step `name` (begun at the previous call) in `out`.
+    fn lap(&mut self, name: &'static str, out: &mut Vec<StageTime>) {
+        let (now, cpu) = (std::time::Instant::now(), process_cpu_seconds());
+        out.push(StageTime {
+            name,
+            wall: (now - self.0).as_secs_f64(),
+            cpu: cpu - self.1,
+        });
+        *self = Stopwatch(now, cpu);
+    }
+}
+
+/// The processor time the process has used (user and system), from `/proc/self/stat` in
+/// clock ticks of 10 ms; zero where there is no such file.
+fn process_cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    // Fields 14 and 15 (utime, stime) follow the parenthesised command name.
+    let after = stat.rsplit(')').next().unwrap_or("");
+    let ticks: f64 = after
+        .split_whitespace()
+        .skip(11)
+        .take(2)
+        .filter_map(|w| w.parse::<f64>().ok())
+        .sum();
+    ticks / 100.0
 }
 
 /// An `f32` ordered for the heap (lengths are finite).
@@ -192,7 +244,8 @@ const SAME_SURFACE: f64 = 0.999;
 /// A piece of a face with its points welded into vertices.
 struct Welded {
     face: u32,
-    ids: Vec<u32>,
+    ids: SmallVec<[u32; 4]>,
+    /// Per edge, or empty when no edge has any.
     tags: Vec<Tags>,
     hidden: bool,
 }
@@ -200,31 +253,35 @@ struct Welded {
 impl Mesh {
     /// Meshes a scene (see the module doc for the steps).
     pub fn from_scene(scene: &Scene, config: MeshConfig) -> Mesh {
+        let mut clock = Stopwatch::start();
+        let mut laps = Vec::new();
         let diag = f64::from(scene.diagonal()).max(1e-30);
         let tol = WELD * diag;
-        let input = input::weld(scene, tol);
+        let mut input = input::weld(scene, tol);
+        clock.lap("weld input", &mut laps);
         let context = cuts::Context::new(&input, tol, COVER_GAP * diag);
+        clock.lap("search structures", &mut laps);
         let cut: Vec<(Option<Vec<Piece>>, usize)> = (0..input.faces.len())
             .into_par_iter()
-            .map_init(Vec::new, |near, f| {
-                let (pieces, count) = context.cut_face(f, near);
-                let whole = pieces.len() == 1 && !pieces[0].hidden && count == 0;
-                ((!whole).then_some(pieces), count)
-            })
+            .map_init(Vec::new, |near, f| context.cut_face(f, near))
             .collect();
         drop(context);
+        input.edges = Vec::new();
+        clock.lap("cut faces", &mut laps);
         let mut mesh = Mesh::default();
         mesh.stats.input_triangles = scene.triangles.len();
         mesh.stats.input = input.counts;
         mesh.stats.d0_cuts = cut.iter().map(|c| c.1).sum();
         let welded = mesh.weld_pieces(&input, cut, tol);
         mesh.stats.pieces = welded.len();
+        clock.lap("weld pieces", &mut laps);
         let (tags, mut hidden) = mesh.triangulate(&input, welded, tol);
+        clock.lap("triangulate", &mut laps);
         mesh.stats.hidden_pieces = hidden.iter().filter(|&&h| h).count();
         mesh.stats.hidden_pieces += surface::hide_enclosed(&mesh, &tags, &mut hidden);
         mesh.stats.split_points = surface::split_points(&mut mesh, &tags, &hidden);
         drop((tags, hidden));
-        mesh.drop_unused_vertices();
+        clock.lap("hide and split", &mut laps);
         let floor = (tol * 10.0) as f32;
         mesh.subdivide(config.patch_size.max(floor));
         mesh.patches = mesh.elements.iter().map(|e| mesh.tri(e)).collect();
@@ -232,11 +289,14 @@ impl Mesh {
         for (i, e) in mesh.elements.iter_mut().enumerate() {
             e.patch = i as u32;
         }
+        clock.lap("patches", &mut laps);
         mesh.subdivide(config.element_size.max(floor));
         mesh.set_eval_points();
+        clock.lap("elements", &mut laps);
         mesh.stats.patches = mesh.patches.len();
         mesh.stats.elements = mesh.elements.len();
         mesh.stats.vertices = mesh.vertices.len();
+        mesh.stage_seconds = laps;
         mesh
     }
 
@@ -274,11 +334,12 @@ impl Mesh {
                 let ids = face
                     .v
                     .map(|c| welder.vertex(self, input.positions[c as usize], face.normal, Some(c)))
-                    .to_vec();
+                    .into_iter()
+                    .collect();
                 out.push(Welded {
                     face: f as u32,
                     ids,
-                    tags: vec![Tags::new(); 3],
+                    tags: Vec::new(),
                     hidden: false,
                 });
                 continue;
@@ -323,10 +384,9 @@ impl Mesh {
             let mid = lengths.len() / 2;
             *lengths.select_nth_unstable_by(mid, f32::total_cmp).1
         };
-        let mut grid = BoxGrid::new(cell.max(tol as f32 * 4.0));
-        for (i, v) in self.vertices.iter().enumerate() {
-            grid.insert(i as u32, v.pos, v.pos);
-        }
+        let grid = BoxGrid::build(cell.max(tol as f32 * 4.0), self.vertices.len(), |i| {
+            (self.vertices[i].pos, self.vertices[i].pos)
+        });
         let mesh = &*self;
         let done: Vec<Triangulated> = pieces
             .par_chunks(1024)
@@ -341,7 +401,10 @@ impl Mesh {
             .collect();
         drop(pieces);
         let mut tags = surface::EdgeTags::default();
-        let mut hidden = Vec::new();
+        let total: usize = done.iter().map(|d| d.elements.len()).sum();
+        let mut hidden = Vec::with_capacity(total);
+        self.elements.reserve(total);
+        self.edges.reserve(total * 3 / 2);
         for d in done {
             self.stats.t_junction_splits += d.inserted;
             for (e, h) in d.elements.into_iter().zip(d.hidden) {
@@ -367,22 +430,24 @@ impl Mesh {
     ) {
         let face = &input.faces[piece.face as usize];
         let n = piece.ids.len();
-        let mut ids: Vec<u32> = Vec::with_capacity(n);
-        let mut tags: Vec<&Tags> = Vec::with_capacity(n);
+        let none = Tags::new();
+        let mut ids: SmallVec<[u32; 8]> = SmallVec::new();
+        let mut tags: SmallVec<[&Tags; 8]> = SmallVec::new();
         for i in 0..n {
             let (a, b) = (piece.ids[i], piece.ids[(i + 1) % n]);
+            let tag = piece.tags.get(i).unwrap_or(&none);
             ids.push(a);
-            tags.push(&piece.tags[i]);
+            tags.push(tag);
             let on = self.points_on_edge(a, b, face.normal, grid, tol, near);
             out.inserted += on.len();
             for v in on {
                 ids.push(v);
-                tags.push(&piece.tags[i]);
+                tags.push(tag);
             }
         }
         let corners = face.v.map(|c| input.positions[c as usize]);
         let frame = Frame::of(corners, face.normal);
-        let q: Vec<DVec2> = ids
+        let q: SmallVec<[DVec2; 8]> = ids
             .iter()
             .map(|&v| frame.plane_point(self.pos(v).as_dvec3()))
             .collect();
@@ -426,7 +491,7 @@ impl Mesh {
         if len2 <= 4.0 * tol * tol {
             return SmallVec::new();
         }
-        grid.query_segment(self.pos(a), self.pos(b), tol as f32, near);
+        grid.query_segment_points(self.pos(a), self.pos(b), tol as f32, near);
         let mut on: SmallVec<[(f64, u32); 2]> = near
             .iter()
             .copied()
@@ -446,12 +511,12 @@ impl Mesh {
                 inside.then_some((s, v))
             })
             .collect();
-        on.sort_by(|x, y| x.0.total_cmp(&y.0));
+        on.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
         on.into_iter().map(|(_, v)| v).collect()
     }
 
-    /// Removes the vertices no element uses (left by triangles that welding collapsed) and
-    /// renumbers the rest in order.
+    /// Removes the vertices no element uses (left by triangles that welding collapsed and by
+    /// point splitting), renumbers the rest in order and rebuilds the edge map.
     fn drop_unused_vertices(&mut self) {
         let mut used = vec![false; self.vertices.len()];
         for e in &self.elements {
@@ -460,20 +525,19 @@ impl Mesh {
             }
         }
         let mut new_index = vec![u32::MAX; self.vertices.len()];
-        let mut kept = Vec::new();
-        for (i, v) in self.vertices.iter().enumerate() {
+        let mut kept = 0;
+        for i in 0..self.vertices.len() {
             if used[i] {
-                new_index[i] = kept.len() as u32;
-                kept.push(*v);
+                new_index[i] = kept as u32;
+                self.vertices[kept] = self.vertices[i];
+                kept += 1;
             }
         }
-        self.vertices = kept;
-        let elements = std::mem::take(&mut self.elements);
-        self.edges.clear();
-        for mut e in elements {
+        self.vertices.truncate(kept);
+        for e in &mut self.elements {
             e.v = e.v.map(|v| new_index[v as usize]);
-            self.push_element(e);
         }
+        self.rebuild_edges();
     }
 
     fn push_element(&mut self, e: Element) -> u32 {
@@ -491,6 +555,8 @@ impl Mesh {
     /// Rebuilds the edge map from the elements.
     fn rebuild_edges(&mut self) {
         self.edges.clear();
+        // About three edges for every two elements in a connected mesh.
+        self.edges.reserve(self.elements.len() * 3 / 2);
         for (i, e) in self.elements.iter().enumerate() {
             for k in 0..3 {
                 self.edges

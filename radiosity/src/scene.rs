@@ -241,6 +241,10 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// Non-degenerate triangles.
     pub triangles: Vec<SceneTri>,
+    /// The file's vertex normals (`vn`) averaged over each triangle, by triangle index (zero
+    /// for a triangle without them; empty when the file has none). The mesher turns over
+    /// triangles whose winding disagrees with them.
+    pub normal_hints: Vec<Vec3>,
     /// The camera from the `# camera:` comment, if any.
     pub camera: Option<Camera>,
     /// Degenerate (zero-area) triangles dropped.
@@ -438,7 +442,9 @@ fn check_obj(file: &str, text: &str, files: &dyn Files) -> Result<Checked, Scene
     }
     if normals {
         out.left_out.push(
-            "vertex normals (vn) ignored: radiosity uses the geometric normal of each face".into(),
+            "vertex normals (vn) used only to turn over triangles wound against them: radiosity \
+             uses the geometric normal of each face"
+                .into(),
         );
     }
     if texcoords {
@@ -797,12 +803,34 @@ fn collect_triangles(
             scene.objects.push(object_for(model, materials, diffuse));
             scene.objects.len() as u32 - 1
         });
-        for f in model.mesh.indices.chunks_exact(3) {
+        let mesh = &model.mesh;
+        // Only when every corner has one (tobj lists normals for the corners that give them).
+        let with_normals = mesh.normal_indices.len() == mesh.indices.len();
+        let normal = |k: usize| {
+            if !with_normals {
+                return None;
+            }
+            let i = *mesh.normal_indices.get(k)? as usize;
+            let n = mesh.normals.get(3 * i..3 * i + 3)?;
+            Some(Vec3::new(n[0], n[1], n[2]))
+        };
+        for (t, f) in mesh.indices.chunks_exact(3).enumerate() {
             let tri = Tri::new(pos[f[0] as usize], pos[f[1] as usize], pos[f[2] as usize]);
             if tri.cross().length() <= 1e-12 * scale * scale || !tri.cross().is_finite() {
                 scene.dropped_degenerate += 1;
-            } else {
-                scene.triangles.push(SceneTri { tri, object });
+                continue;
+            }
+            scene.triangles.push(SceneTri { tri, object });
+            let hint = (0..3)
+                .map(|k| normal(3 * t + k))
+                .sum::<Option<Vec3>>()
+                .filter(|n| n.is_finite())
+                .map_or(Vec3::ZERO, Vec3::normalize_or_zero);
+            if hint != Vec3::ZERO {
+                scene
+                    .normal_hints
+                    .resize(scene.triangles.len() - 1, Vec3::ZERO);
+                scene.normal_hints.push(hint);
             }
         }
     }
@@ -1055,6 +1083,19 @@ mod tests {
         assert_eq!(scene.triangles.len(), 1);
         assert_eq!(scene.objects[0].name, "caf\u{e9}");
         assert_eq!(scene.objects[0].emission, Vec3::ONE);
+    }
+
+    #[test]
+    fn vertex_normals_are_kept_per_triangle_as_hints() {
+        // Two triangles facing +z; the first has vertex normals against its winding.
+        let text = "mtllib lib.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 -1\n\
+                    vn 0 0 1\nf 1//1 2//1 3//1\nf 2//2 4//2 3//2\n";
+        let mtl = Mem(vec![("lib.mtl", b"newmtl m\nKe 1 1 1\n".to_vec())]);
+        let scene = load_obj_with("s.obj", text, &mtl).expect("scene");
+        assert_eq!(scene.triangles.len(), 2);
+        assert!(scene.triangles[0].tri.normal().z > 0.0);
+        assert_eq!(scene.normal_hints[0], Vec3::NEG_Z);
+        assert_eq!(scene.normal_hints[1], Vec3::Z);
     }
 
     #[test]

@@ -421,6 +421,10 @@ fn print_left_out(name: &str, scene: &Scene, mesh: &Mesh, diag: f32) {
             c.flipped_edges,
             "edges between triangles of one object facing opposite ways",
         ),
+        (
+            c.reoriented,
+            "triangles turned over to face the way their surface (or the file's normals) does",
+        ),
     ];
     for (n, what) in counts.into_iter().filter(|c| c.0 > 0) {
         eprintln!(

@@ -32,6 +32,12 @@ pub trait Loader {
     /// folder, then `-I` folders, then the standard library) and returns its path and text, or
     /// `None` when no such file exists.
     fn load(&mut self, name: &str, from: &str) -> Option<(String, String)>;
+
+    /// The places [`Loader::load`] looks in for a file included from `from`, in order, for the
+    /// message when a file is not found (none by default).
+    fn searched(&self, _from: &str) -> Vec<String> {
+        Vec::new()
+    }
 }
 
 /// A loader that knows no files (for programs without includes, and tests).
@@ -396,7 +402,18 @@ impl Preprocessor<'_> {
         match loaded {
             None => {
                 let message = format!("cannot find the file \"{name}\"");
-                self.error(at, &message, "included here");
+                let places = self.loader.searched(&from);
+                let mut diag = Diagnostic::at(Place::File(at), &message, "included here")
+                    .with_code("preprocess");
+                if !places.is_empty() {
+                    let names = if is_use {
+                        format!("{} ", use_candidates(name).join(", "))
+                    } else {
+                        String::new()
+                    };
+                    diag = diag.with_help(format!("looked for {names}in: {}", places.join("; ")));
+                }
+                self.out.diagnostics.push(diag);
             }
             Some(_) if depth + 1 > MAX_DEPTH => self.error(
                 at,

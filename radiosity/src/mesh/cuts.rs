@@ -13,7 +13,6 @@
 //!   file when neither is (as a decal is drawn over what is under it), covers the other.
 
 use glam::{DVec2, DVec3};
-use rustc_hash::FxHashMap;
 
 use super::input::Input;
 use super::piece::{self, Cut, Frame, Piece, Tag};
@@ -26,10 +25,8 @@ pub const PARALLEL: f64 = 0.999;
 pub struct Context<'a> {
     /// The welded input.
     pub input: &'a Input,
-    /// Faces by their boxes widened by `gap`.
+    /// Faces by their boxes widened by `tol`.
     pub grid: BoxGrid,
-    /// Faces around each edge `(a, b)` with `a < b`.
-    pub edges: FxHashMap<(u32, u32), smallvec::SmallVec<[u32; 2]>>,
     /// Points closer than this are one point.
     pub tol: f64,
     /// Parallel faces closer than this cover each other.
@@ -44,27 +41,16 @@ impl Context<'_> {
             .iter()
             .map(|f| {
                 let p = f.v.map(|i| input.positions[i as usize]);
-                let pad = DVec3::splat(gap + tol);
+                let pad = DVec3::splat(tol);
                 (
                     (p[0].min(p[1]).min(p[2]) - pad).as_vec3(),
                     (p[0].max(p[1]).max(p[2]) + pad).as_vec3(),
                 )
             })
             .collect();
-        let mut edges: FxHashMap<(u32, u32), smallvec::SmallVec<[u32; 2]>> = FxHashMap::default();
-        for (i, f) in input.faces.iter().enumerate() {
-            for k in 0..3 {
-                let (a, b) = (f.v[k], f.v[(k + 1) % 3]);
-                edges
-                    .entry((a.min(b), a.max(b)))
-                    .or_default()
-                    .push(i as u32);
-            }
-        }
         Context {
             input,
             grid: BoxGrid::over(&boxes),
-            edges,
             tol,
             gap,
         }
@@ -77,23 +63,29 @@ impl Context<'_> {
     }
 
     /// Cuts face `f` into pieces: the cuts and covers found among its neighbours, applied once
-    /// each. Returns the pieces and the number of cuts made.
-    pub fn cut_face(&self, f: usize, near: &mut Vec<u32>) -> (Vec<Piece>, usize) {
+    /// each. Returns the pieces (`None` when the face stays whole and visible) and the number
+    /// of cuts made.
+    pub fn cut_face(&self, f: usize, near: &mut Vec<u32>) -> (Option<Vec<Piece>>, usize) {
         let face = &self.input.faces[f];
         let v = self.corners(f);
+        if face_width(v) < self.tol {
+            return (None, 0); // a sliver: never cut, only bisected along its length
+        }
         let frame = Frame::of(v, face.normal);
-        let mut pieces = vec![piece::whole(v, &frame)];
-        let narrow = face_width(v) < self.tol;
-        let (lo, hi) = (
-            v[0].min(v[1]).min(v[2]).as_vec3(),
-            v[0].max(v[1]).max(v[2]).as_vec3(),
+        // What can cut the face touches its box; what can cover it lies in front within `gap`.
+        let lo = v[0].min(v[1]).min(v[2]);
+        let hi = v[0].max(v[1]).max(v[2]);
+        let front = face.normal * self.gap;
+        self.grid.query_box(
+            lo.min(lo + front).as_vec3(),
+            hi.max(hi + front).as_vec3(),
+            near,
         );
-        self.grid.query_box(lo, hi, near);
         let mut cuts: Vec<Cut> = Vec::new();
         let mut covers: Vec<[DVec2; 3]> = Vec::new();
         for &g in near.iter() {
             let g = g as usize;
-            if g == f || narrow {
+            if g == f {
                 continue;
             }
             let other = &self.input.faces[g];
@@ -120,6 +112,10 @@ impl Context<'_> {
             }
         }
         let count = cuts.len();
+        if count == 0 && covers.is_empty() {
+            return (None, 0);
+        }
+        let mut pieces = vec![piece::whole(v, &frame)];
         for cut in &cuts {
             piece::apply(&mut pieces, cut, self.tol);
         }
@@ -129,7 +125,8 @@ impl Context<'_> {
                 p.hidden = covers.iter().any(|t| piece::inside_triangle(c, *t));
             }
         }
-        (pieces, count)
+        let whole = pieces.len() == 1 && !pieces[0].hidden && count == 0;
+        ((!whole).then_some(pieces), count)
     }
 
     /// Whether the parallel face `g`, its corners at heights `h` over the plane of face `f`
@@ -159,8 +156,9 @@ impl Context<'_> {
         let face = &self.input.faces[g];
         for k in 0..3 {
             let (a, b) = (face.v[k], face.v[(k + 1) % 3]);
-            let shared = self.edges[&(a.min(b), a.max(b))].iter().any(|&o| {
-                o as usize != g && self.input.faces[o as usize].normal.dot(face.normal) > PARALLEL
+            let shared = self.input.edge_uses(a, b).iter().any(|u| {
+                let o = u.face() as usize;
+                o != g && self.input.faces[o].normal.dot(face.normal) > PARALLEL
             });
             if !shared {
                 let (pa, pb) = (

@@ -88,7 +88,8 @@ pub fn hide_enclosed(mesh: &Mesh, tags: &EdgeTags, hidden: &mut [bool]) -> usize
 /// Splits sample points along discontinuities and between hidden and visible elements: the
 /// corners of elements that meet across a smooth edge (and are both hidden or both visible)
 /// share a point, others get a copy of their own. Hidden copies get a zero normal, which the
-/// form factor kernel reads as "receives nothing". Returns the copies made.
+/// form factor kernel reads as "receives nothing". Then drops the vertices no element uses and
+/// rebuilds the edge map. Returns the copies made.
 pub fn split_points(mesh: &mut Mesh, tags: &EdgeTags, hidden: &[bool]) -> usize {
     let n = mesh.elements.len();
     let mut sets = Sets::new(3 * n);
@@ -137,6 +138,6 @@ pub fn split_points(mesh: &mut Mesh, tags: &EdgeTags, hidden: &[bool]) -> usize 
             mesh.vertices[v as usize].normal = Vec3::ZERO;
         }
     }
-    mesh.rebuild_edges();
+    mesh.drop_unused_vertices();
     copies
 }
