@@ -2,6 +2,8 @@
 //! - occlusion rays/s on the Cornell box with each quad split 18 × 18 (10,368 triangles), rays
 //!   between random surface points (origin lifted 1e-3 mm, tmax 0.999), as measured for
 //!   Embree 4 (`rtcOccluded1`, through the `embreex` Python binding) in `BENCHMARKS.md`; Samet, ropes and Glassner traversal;
+//! - the same rays through the flat octree walk a CARM node runs (`RAD.RAYS.WALK`, every voxel
+//!   held), 16 and 256 rays a call, beside `Octree::occluded` with ropes;
 //! - form factors/s (16 shadow rays each, Cornell box, light as source);
 //! - time to a converged Cornell box (reference solver; rayon uses the pool it is given, see
 //!   the `solve` group note).
@@ -12,8 +14,10 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::geom::Tri;
+use occ_radiosity::intrinsics::RAY_FLOATS;
 use occ_radiosity::kernels::{SamplePoint, shoot_batch};
 use occ_radiosity::mesh::{Mesh, MeshConfig};
+use occ_radiosity::octree::flat::{CURSOR_INTS, START};
 use occ_radiosity::octree::{Octree, OctreeConfig, Traversal};
 use occ_radiosity::rng::Pcg32;
 use occ_radiosity::scene::cornell;
@@ -82,6 +86,66 @@ fn occlusion(c: &mut Criterion) {
     c.bench_function("octree_build_cornell_10k", |b| {
         b.iter(|| Octree::build(black_box(&tris), OctreeConfig::default()))
     });
+}
+
+/// Rays per call of the walk intrinsic: one receiver's shadow rays, and a batch of receivers'.
+const WALK_BATCHES: [usize; 2] = [16, 256];
+
+/// The octree walk a node runs (`FlatView::walk`, what `RAD.RAYS.WALK` calls) with every voxel
+/// held, against `Octree::occluded` with ropes on the same rays, in one run.
+fn walk(c: &mut Criterion) {
+    let tris = cornell::grid_triangles(18).expect("cornell");
+    let tree = Octree::build(&tris, OctreeConfig::default());
+    let flat = tree.flat().expect("flat");
+    let (view, slots) = (flat.view(), flat.slots());
+    let rays: Vec<f32> = ray_set(&tris, 100_000, 7)
+        .iter()
+        .flat_map(|(o, d)| {
+            o.to_array()
+                .into_iter()
+                .chain(d.to_array())
+                .chain([0.0, 0.999])
+        })
+        .collect();
+    let n = rays.len() / RAY_FLOATS;
+    let mut group = c.benchmark_group("walk_cornell_10k");
+    group.throughput(Throughput::Elements(n as u64));
+    group.sample_size(20);
+    group.bench_function("octree_ropes", |b| {
+        b.iter(|| {
+            let mut hits = 0u32;
+            for r in rays.chunks_exact(RAY_FLOATS) {
+                let (o, d) = (Vec3::from_slice(&r[..3]), Vec3::from_slice(&r[3..6]));
+                hits += tree.occluded(o, d, r[6], r[7], Traversal::Ropes) as u32;
+            }
+            black_box(hits)
+        })
+    });
+    for batch in WALK_BATCHES {
+        let (mut blocked, mut cursor) = (vec![0u8; batch], vec![START; CURSOR_INTS * batch]);
+        group.bench_function(format!("flat_walk_{batch}_per_call"), |b| {
+            b.iter(|| {
+                let mut hits = 0u32;
+                for r in rays.chunks(RAY_FLOATS * batch) {
+                    let k = r.len() / RAY_FLOATS;
+                    blocked[..k].fill(0);
+                    cursor[..CURSOR_INTS * k].fill(START);
+                    let count = view.walk(
+                        &slots,
+                        flat.pool(),
+                        r,
+                        &mut blocked[..k],
+                        &mut cursor[..CURSOR_INTS * k],
+                        &mut [],
+                    );
+                    assert_eq!(count, Some(0));
+                    hits += blocked[..k].iter().map(|&x| x as u32).sum::<u32>();
+                }
+                black_box(hits)
+            })
+        });
+    }
+    group.finish();
 }
 
 fn form_factors(c: &mut Criterion) {
@@ -164,5 +228,5 @@ fn solve(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, occlusion, form_factors, solve);
+criterion_group!(benches, occlusion, walk, form_factors, solve);
 criterion_main!(benches);

@@ -151,48 +151,6 @@ impl SourceDensity {
     /// divides by its area-weighted mean; `None` when the mean is not positive or the density
     /// is uniform within a part in a million (no weights needed).
     pub fn new(src: &Tri, g: u32, density: impl Fn(Vec3) -> f32) -> Option<SourceDensity> {
-        let cells = Self::tabulate(src, g, density);
-        // The warp preserves area, so every cell stands for the same area.
-        let mean = cells.iter().map(|&c| c as f64).sum::<f64>() / cells.len() as f64;
-        Self::relative(g.max(1), cells, mean)
-    }
-
-    /// The density of a source made of `elements` (triangles covering it, each with its
-    /// density, any scale, non-negative): each grid cell takes the density of the element
-    /// holding its centre, and the mean is the elements' area-weighted mean. `None` as for
-    /// [`SourceDensity::new`].
-    pub fn from_elements(src: &Tri, g: u32, elements: Vec<(Tri, f32)>) -> Option<SourceDensity> {
-        if elements.is_empty() {
-            return None;
-        }
-        // The cells are visited in order, so the element holding the last cell's centre is
-        // tried first.
-        let last = std::cell::Cell::new(0);
-        let cells = Self::tabulate(src, g, |x| {
-            let inside = |t: &Tri| t.barycentric(x).iter().all(|&b| b >= -1e-4);
-            let at = if inside(&elements[last.get()].0) {
-                last.get()
-            } else {
-                // The element containing x (the nearest, for points on or beside edges).
-                elements
-                    .iter()
-                    .map(|(t, _)| (t.closest_point(x) - x).length_squared())
-                    .enumerate()
-                    .fold((0, f32::MAX), |b, c| if c.1 < b.1 { c } else { b })
-                    .0
-            };
-            last.set(at);
-            elements[at].1
-        });
-        let (mut sum, mut area) = (0.0f64, 0.0f64);
-        for (t, d) in &elements {
-            sum += f64::from(t.area()) * f64::from(d.max(0.0));
-            area += f64::from(t.area());
-        }
-        Self::relative(g.max(1), cells, sum / area)
-    }
-
-    fn tabulate(src: &Tri, g: u32, density: impl Fn(Vec3) -> f32) -> Vec<f32> {
         let g = g.max(1);
         let mut cells = Vec::with_capacity((g * g) as usize);
         for i in 0..g {
@@ -201,12 +159,8 @@ impl SourceDensity {
                 cells.push(density(src.sample(u, v)).max(0.0));
             }
         }
-        cells
-    }
-
-    /// Divides the cells by `mean`; `None` when it is not positive or the cells are uniform
-    /// within a part in a million.
-    fn relative(g: u32, mut cells: Vec<f32>, mean: f64) -> Option<SourceDensity> {
+        // The warp preserves area, so every cell stands for the same area.
+        let mean = cells.iter().map(|&c| c as f64).sum::<f64>() / cells.len() as f64;
         let (lo, hi) = cells
             .iter()
             .fold((f32::MAX, f32::MIN), |(a, b), &c| (a.min(c), b.max(c)));
@@ -215,8 +169,52 @@ impl SourceDensity {
         }
         cells
             .iter_mut()
-            .for_each(|c| *c = (c.max(0.0) as f64 / mean) as f32);
+            .for_each(|c| *c = (*c as f64 / mean) as f32);
         Some(SourceDensity { g, cells })
+    }
+
+    /// The density of a patch `src` made of `parts`, each a triangle of it with its unshot
+    /// radiosity (unshot power over area, channels summed): at each grid cell, the part that
+    /// contains the cell's centre (the nearest, for centres beside every part). `None` with
+    /// fewer than two parts, or as [`SourceDensity::new`]. The solver and the
+    /// `RAD.SOURCE.DENSITY` intrinsic both tabulate a shooting patch with this.
+    pub fn of_parts(src: &Tri, g: u32, parts: &[(Tri, f32)]) -> Option<SourceDensity> {
+        if parts.len() < 2 {
+            return None;
+        }
+        // Neighbouring cells mostly lie in one part: the part holding the last cell's centre
+        // is tried first, and the nearest part searched for only when it fails.
+        let last = std::cell::Cell::new(0);
+        SourceDensity::new(src, g, |x| {
+            let inside = |t: &Tri| t.barycentric(x).iter().all(|&b| b >= 0.0);
+            if !inside(&parts[last.get()].0) {
+                let nearest = parts
+                    .iter()
+                    .map(|(t, _)| (t.closest_point(x) - x).length_squared())
+                    .enumerate()
+                    .fold((0, f32::MAX), |b, c| if c.1 < b.1 { c } else { b })
+                    .0;
+                last.set(nearest);
+            }
+            parts[last.get()].1
+        })
+    }
+
+    /// A density from its `g × g` cells as [`SourceDensity::cells`] lists them; `None` unless
+    /// there are `g²` cells for some `g ≥ 1`, each finite and non-negative.
+    pub fn from_cells(cells: &[f32]) -> Option<SourceDensity> {
+        let g = (cells.len() as f64).sqrt().round() as u32;
+        let fits = g >= 1 && (g * g) as usize == cells.len();
+        let valid = cells.iter().all(|c| c.is_finite() && *c >= 0.0);
+        (fits && valid).then(|| SourceDensity {
+            g,
+            cells: cells.to_vec(),
+        })
+    }
+
+    /// The cells, row by row (`u` major), each the density at its centre over the mean.
+    pub fn cells(&self) -> &[f32] {
+        &self.cells
     }
 
     /// The relative density at `(u, v)` in [0,1)².

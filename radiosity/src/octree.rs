@@ -30,6 +30,8 @@ use glam::{BVec3A, UVec3, Vec3, Vec3A};
 use crate::geom::{Tri, ray_triangle};
 use crate::packet::{BoxGroup, LANES, NO_TRIANGLE, RayQuery, TriPacket};
 
+pub mod flat;
+
 /// One flattened octree node.
 #[derive(Clone, Copy, Debug)]
 struct Node {
@@ -439,6 +441,25 @@ impl Octree {
             Traversal::Glassner => w.run::<GLASSNER>(self, &mut path, visit),
         }
     }
+}
+
+/// What a walk reads of a tree: the grid (root corner, finest cell, depth), each node's
+/// `[first, count]` (`count` is [`INTERIOR`] for an interior node, whose children are
+/// `first .. first + 8`) and each leaf face's rope. The octree reads its own arrays; the flat
+/// form a node is sent ([`flat`]) reads the arrays it was passed. One walk over both, so that
+/// they visit the same leaves with the same arithmetic.
+pub(crate) trait Skeleton {
+    /// The low corner of the root box.
+    fn lo(&self) -> Vec3;
+    /// The side of a finest cell.
+    fn cell(&self) -> f32;
+    /// The depth of the finest grid (`2^depth` cells a side), at most 20.
+    fn depth(&self) -> u32;
+    /// `[first, count]` of node `n`.
+    fn hot(&self, n: u32) -> [u32; 2];
+    /// The rope of leaf `n` across `face` (`2 axis + 1` for the high side): the neighbour of
+    /// equal or greater size across it, as `(level, node)`.
+    fn neighbour(&self, n: u32, face: usize) -> (u32, u32);
 
     /// Returns the parameter at which the ray enters the root box within `[tmin, tmax]`.
     ///
@@ -447,9 +468,9 @@ impl Octree {
     /// such a ray (lying in the face) has nothing to hit either way.
     #[inline]
     fn enter(&self, o: Vec3, inv: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
-        let size = Vec3::splat((1u32 << self.depth) as f32 * self.cell);
-        let a = (self.lo - o) * inv;
-        let b = (self.lo + size - o) * inv;
+        let size = Vec3::splat((1u32 << self.depth()) as f32 * self.cell());
+        let a = (self.lo() - o) * inv;
+        let b = (self.lo() + size - o) * inv;
         let t_near = a.min(b).max_element().max(tmin);
         let t_far = a.max(b).min_element().min(tmax);
         (t_near <= t_far).then_some(t_near)
@@ -460,7 +481,7 @@ impl Octree {
     #[inline]
     fn common_level(&self, level: u32, origin: UVec3, q: UVec3) -> u32 {
         let diff = (q ^ origin).max_element();
-        let shared = diff.leading_zeros().saturating_sub(32 - self.depth);
+        let shared = diff.leading_zeros().saturating_sub(32 - self.depth());
         shared.min(level)
     }
 
@@ -468,7 +489,7 @@ impl Octree {
     /// passed in `path`; returns the leaf's level and index.
     #[inline(always)]
     fn descend(&self, path: &mut Path, mut level: u32, mut n: u32, q: UVec3) -> (u32, u32) {
-        while self.hot[n as usize][1] == INTERIOR {
+        while level < self.depth() && self.hot(n)[1] == INTERIOR {
             (level, n) = self.child_towards(path, level, n, q);
         }
         (level, n)
@@ -478,11 +499,39 @@ impl Octree {
     /// `path`.
     #[inline(always)]
     fn child_towards(&self, path: &mut Path, level: u32, n: u32, q: UVec3) -> (u32, u32) {
-        let shift = self.depth - level - 1;
+        let shift = self.depth() - level - 1;
         let b = (q >> shift) & UVec3::ONE;
-        let child = self.hot[n as usize][0] + (b.x | (b.y << 1) | (b.z << 2));
+        let child = self.hot(n)[0] + (b.x | (b.y << 1) | (b.z << 2));
         path[level as usize + 1] = child;
         (level + 1, child)
+    }
+}
+
+impl Skeleton for Octree {
+    #[inline(always)]
+    fn lo(&self) -> Vec3 {
+        self.lo
+    }
+
+    #[inline(always)]
+    fn cell(&self) -> f32 {
+        self.cell
+    }
+
+    #[inline(always)]
+    fn depth(&self) -> u32 {
+        self.depth
+    }
+
+    #[inline(always)]
+    fn hot(&self, n: u32) -> [u32; 2] {
+        self.hot[n as usize]
+    }
+
+    #[inline(always)]
+    fn neighbour(&self, n: u32, face: usize) -> (u32, u32) {
+        let rope = self.ropes[6 * n as usize + face];
+        ((rope & 255) as u32, (rope >> 8) as u32)
     }
 }
 
@@ -537,7 +586,7 @@ impl Walker {
     /// Positions a walk at the leaf where `o + t d` enters the tree within `[tmin, tmax]`.
     #[inline(always)]
     fn start(
-        tree: &Octree,
+        tree: &impl Skeleton,
         path: &mut Path,
         o: Vec3,
         d: Vec3,
@@ -552,14 +601,14 @@ impl Walker {
         let d = Vec3A::from(d);
         let forward = d.cmpgt(Vec3A::ZERO);
         let mut w = Walker {
-            oc: (start - Vec3A::from(tree.lo)) / tree.cell,
+            oc: (start - Vec3A::from(tree.lo())) / tree.cell(),
             t0,
-            dc: d / tree.cell,
-            inv_c: Vec3A::from(inv) * tree.cell,
+            dc: d / tree.cell(),
+            inv_c: Vec3A::from(inv) * tree.cell(),
             forward01: Vec3A::select(forward, Vec3A::ONE, Vec3A::ZERO),
             forward,
             moving: d.cmpne(Vec3A::ZERO),
-            cells: (1u32 << tree.depth) as f32,
+            cells: (1u32 << tree.depth()) as f32,
             tmax,
             level: 0,
             node: 0,
@@ -584,12 +633,12 @@ impl Walker {
     /// Descends from node `n` at `level` to the leaf holding cell `q` and computes where the
     /// ray leaves it.
     #[inline(always)]
-    fn enter(&mut self, tree: &Octree, path: &mut Path, level: u32, n: u32, q: Vec3A) {
+    fn enter(&mut self, tree: &impl Skeleton, path: &mut Path, level: u32, n: u32, q: Vec3A) {
         (self.level, self.node) = tree.descend(path, level, n, q.as_uvec3());
-        self.size = (1u32 << (tree.depth - self.level)) as f32;
+        self.size = (1u32 << (tree.depth() - self.level)) as f32;
         // Exact: the size is a power of two.
         self.origin = trunc(q * (1.0 / self.size)) * self.size;
-        self.leaf = tree.hot[self.node as usize];
+        self.leaf = tree.hot(self.node);
         let far = self.origin + self.forward01 * self.size;
         let t = Vec3A::select(
             self.moving,
@@ -606,7 +655,7 @@ impl Walker {
     #[inline(always)]
     fn run<const MODE: u8>(
         &mut self,
-        tree: &Octree,
+        tree: &impl Skeleton,
         path: &mut Path,
         mut visit: impl FnMut([u32; 2], f32) -> bool,
     ) {
@@ -616,7 +665,7 @@ impl Walker {
     /// Steps to the next leaf along the ray; false when the ray has left the tree or passed
     /// `tmax`.
     #[inline(always)]
-    fn advance<const MODE: u8>(&mut self, tree: &Octree, path: &mut Path) -> bool {
+    fn advance<const MODE: u8>(&mut self, tree: &impl Skeleton, path: &mut Path) -> bool {
         if self.t_exit >= self.tmax {
             return false;
         }
@@ -640,8 +689,7 @@ impl Walker {
             }
             ROPES => {
                 let face = 2 * axis + ((self.forward.bitmask() >> axis) & 1) as usize;
-                let rope = tree.ropes[6 * self.node as usize + face];
-                ((rope & 255) as u32, (rope >> 8) as u32)
+                tree.neighbour(self.node, face)
             }
             _ => (0, 0),
         };

@@ -27,7 +27,7 @@ use crate::scene::Scene;
 /// Cells per side of the grid that tabulates a shooting patch's unshot radiosity
 /// ([`SourceDensity`]): finer than the elements of a patch at the default sizes (a patch is
 /// about five elements across), so each element's share is seen.
-const DENSITY_GRID: u32 = 24;
+pub const DENSITY_GRID: u32 = 24;
 
 /// `Until::Error(f)` stops when the estimated error is at most `ERROR_MARGIN × f`. The estimate
 /// spreads the unshot power evenly; in a room lit only through a doorway, which gets less than
@@ -379,10 +379,7 @@ impl<'a> Solver<'a> {
             .filter(|((e, _), _)| e.patch as usize == src)
             .map(|((e, u), &a)| (self.mesh.tri(e), (u.element_sum() / a.max(1e-300)) as f32))
             .collect();
-        if parts.len() < 2 {
-            return None;
-        }
-        SourceDensity::from_elements(&self.mesh.patches[src], DENSITY_GRID, parts)
+        SourceDensity::of_parts(&self.mesh.patches[src], DENSITY_GRID, &parts)
     }
 
     /// Shadow rays per far form factor ([`FormFactorConfig::far_rays`]) for a shot of `shot`

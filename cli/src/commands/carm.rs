@@ -8,6 +8,7 @@
 //! The host does no radiosity: it sends the scene and its mesh and books what the nodes report
 //! (per shot, the power each patch received; at the end, the irradiance at every sample point).
 
+use std::f64::consts::PI;
 use std::io::Cursor;
 use std::sync::{Arc, Mutex};
 
@@ -39,13 +40,19 @@ mod tag {
 }
 
 /// How to run carm.occ.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct CarmSettings {
     /// Nodes of the ternary tree.
     pub nodes: usize,
     /// OS threads running the nodes (1: deterministic timeslicing).
     pub threads: usize,
+    /// The node program to run instead of carm.occ (its file name and text): any program that
+    /// speaks the same host protocol.
+    pub program: Option<(String, String)>,
 }
+
+/// Called after each shot with the shots so far and the unshot fraction before the last one.
+pub type OnShot = Box<dyn FnMut(u64, f64) + Send>;
 
 /// One node's counters, as carm.occ reports them and the runtime measured them.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -90,8 +97,12 @@ pub struct CarmReport {
 
 /// Runs carm.occ on `solver`'s scene and mesh and books its solution into `solver` (irradiance,
 /// unshot power, accounts, convergence record, counters). The solver must be fresh (no shot yet)
-/// and without adaptive subdivision.
-pub fn solve(solver: &mut Solver, settings: CarmSettings) -> anyhow::Result<CarmReport> {
+/// and without adaptive subdivision. `on_shot` hears of each shot as the root reports it.
+pub fn solve(
+    solver: &mut Solver,
+    settings: &CarmSettings,
+    on_shot: OnShot,
+) -> anyhow::Result<CarmReport> {
     anyhow::ensure!(
         solver.config().adapt.is_none(),
         "--solver carm does not subdivide yet: give --no-adapt"
@@ -102,15 +113,23 @@ pub fn solve(solver: &mut Solver, settings: CarmSettings) -> anyhow::Result<Carm
         settings.nodes
     );
     let input = host_input(solver)?;
-    let compiled = compile()?;
+    let compiled = match &settings.program {
+        Some((name, text)) => compile(name, text)?,
+        None => compile("carm.occ", PROGRAM)?,
+    };
     let shape: Shape = format!("tree3:{}", settings.nodes)
         .parse()
         .map_err(|e| anyhow::anyhow!("--nodes {}: {e}", settings.nodes))?;
     let screen = SharedBuf::default();
     let errors = SharedBuf::default();
+    let tap = Screen {
+        bytes: screen.clone(),
+        decoded: 0,
+        on_shot: Some(on_shot),
+    };
     let host = HostIo::new(
         Box::new(Cursor::new(input)),
-        Box::new(screen.clone()),
+        Box::new(tap),
         Box::new(errors.clone()),
     )
     .binary();
@@ -146,16 +165,16 @@ pub fn solve(solver: &mut Solver, settings: CarmSettings) -> anyhow::Result<Carm
     Ok(report(&outcome, nodes))
 }
 
-/// Compiles the embedded node program.
-fn compile() -> anyhow::Result<occ_codegen::Compiled> {
-    let (front, checked) = frontend::load_text("carm.occ", PROGRAM, &Options::default());
+/// Compiles the node program `text` (named `name` in its diagnostics).
+fn compile(name: &str, text: &str) -> anyhow::Result<occ_codegen::Compiled> {
+    let (front, checked) = frontend::load_text(name, text, &Options::default());
     let Some(front) = front else {
         let diags: Vec<String> = checked
             .diagnostics
             .iter()
             .map(|d| format!("{}:{}: {}", d.file.display(), d.line, d.message))
             .collect();
-        anyhow::bail!("carm.occ does not compile:\n{}", diags.join("\n"));
+        anyhow::bail!("{name} does not compile:\n{}", diags.join("\n"));
     };
     let set = frontend::intrinsics();
     occ_codegen::compile_with(
@@ -164,7 +183,7 @@ fn compile() -> anyhow::Result<occ_codegen::Compiled> {
         &front.parsed.map,
         &set,
     )
-    .map_err(|e| anyhow::anyhow!("carm.occ: {e}"))
+    .map_err(|e| anyhow::anyhow!("{name}: {e}"))
 }
 
 /// The host protocol's input: header, occluders, patches, sample points, elements
@@ -187,6 +206,15 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     w.int(int(mesh.patches.len(), "patches")?);
     w.int(int(mesh.vertices.len(), "sample points")?);
     w.int(int(mesh.elements.len(), "elements")?);
+    // The elements go grouped by patch (in mesh order within each), as the controller keeps them.
+    let mut by_patch: Vec<usize> = (0..mesh.elements.len()).collect();
+    by_patch.sort_by_key(|&e| mesh.elements[e].patch);
+    let mut per_patch = vec![0usize; mesh.patches.len()];
+    for e in &mesh.elements {
+        per_patch[e.patch as usize] += 1;
+    }
+    let most = per_patch.iter().copied().max().unwrap_or(0);
+    w.int(int(most, "elements in one patch")?);
     w.int(config.form_factor.rays as i32);
     w.int64(config.seed as i64);
     w.real32(config.form_factor.offset);
@@ -219,20 +247,119 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
         w.vec3(v.normal);
         w.vec3(v.eval);
     }
-    for e in &mesh.elements {
+    for e in by_patch.iter().map(|&e| &mesh.elements[e]) {
         for v in e.v {
             w.int(v as i32);
         }
         w.int(e.patch as i32);
-        w.real64(mesh.tri(e).area() as f64);
+        let area = mesh.tri(e).area() as f64;
+        w.real64(area);
+        let emitted = scene.objects[e.object as usize].emission.as_dvec3() * PI * area;
+        for c in 0..3 {
+            w.real64(emitted[c]);
+        }
     }
     Ok(w.0)
+}
+
+/// One message the root writes to the host (programs/README.md, "Host protocol").
+#[derive(Clone, Debug, PartialEq)]
+enum Message {
+    /// A shot: shots so far, source patch, form factors, rays, microseconds since the first
+    /// shot, power shot, the unshot fraction before it, power received per patch (RGB).
+    Shot {
+        shots: u64,
+        src: usize,
+        form_factors: u64,
+        rays: u64,
+        micros: u32,
+        shot: DVec3,
+        unshot_fraction: f64,
+        received: Vec<DVec3>,
+    },
+    /// The irradiance at sample point `0`.
+    Result(usize, Vec3),
+    /// A node's counters: node, points, corners, form factors, rays.
+    Counters([u64; 5]),
+    /// Every patch's unshot power left.
+    Patches(Vec<DVec3>),
+    /// The scene is over the program's capacities: its limits on triangles, patches, sample
+    /// points, rays, nodes, elements and elements of one patch.
+    Refused([i32; 7]),
+    /// The end.
+    End,
+}
+
+impl Message {
+    /// Decodes the message at the start of `bytes`: `Ok(None)` when they end before it does,
+    /// otherwise the message and its length in bytes.
+    fn decode(bytes: &[u8]) -> anyhow::Result<Option<(Message, usize)>> {
+        let mut r = Reader {
+            bytes,
+            at: 0,
+            short: false,
+        };
+        match Message::read(&mut r) {
+            Ok(m) => Ok(Some((m, r.at))),
+            Err(Short) if r.short => Ok(None),
+            Err(Short) => anyhow::bail!(
+                "carm.occ wrote an unknown host message tag at byte 0 (first bytes {:?})",
+                &bytes[..bytes.len().min(64)]
+            ),
+        }
+    }
+
+    fn read(r: &mut Reader) -> Result<Message, Short> {
+        let rgb64 =
+            |r: &mut Reader| Ok::<_, Short>(DVec3::new(r.real64()?, r.real64()?, r.real64()?));
+        Ok(match r.int()? {
+            tag::END => Message::End,
+            tag::SHOT => {
+                let [shots, src, form_factors, rays, micros] = [(); 5].map(|_| r.int());
+                let (shot, unshot_fraction) = (rgb64(r)?, r.real64()?);
+                let count = usize::try_from(r.int()?).map_err(|_| Short)?;
+                let received = (0..count / 3).map(|_| rgb64(r)).collect::<Result<_, _>>()?;
+                Message::Shot {
+                    shots: shots? as u64,
+                    src: src? as usize,
+                    form_factors: form_factors? as u64,
+                    rays: rays? as u64,
+                    micros: micros? as u32,
+                    shot,
+                    unshot_fraction,
+                    received,
+                }
+            }
+            tag::RESULT => {
+                let g = r.int()? as usize;
+                Message::Result(g, Vec3::new(r.real32()?, r.real32()?, r.real32()?))
+            }
+            tag::COUNTERS => {
+                let mut c = [0u64; 5];
+                for x in &mut c {
+                    *x = r.int()? as u64;
+                }
+                Message::Counters(c)
+            }
+            tag::PATCHES => {
+                let count = usize::try_from(r.int()?).map_err(|_| Short)?;
+                Message::Patches((0..count / 3).map(|_| rgb64(r)).collect::<Result<_, _>>()?)
+            }
+            tag::REFUSED => {
+                let mut limits = [0i32; 7];
+                for x in &mut limits {
+                    *x = r.int()?;
+                }
+                Message::Refused(limits)
+            }
+            _ => return Err(Short),
+        })
+    }
 }
 
 /// Books what the root wrote into `solver`; returns the nodes' own counters (node, points,
 /// corners, form factors, rays).
 fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
-    let mut r = Reader { bytes, at: 0 };
     let rho: Vec<DVec3> = solver
         .mesh
         .patch_object
@@ -242,87 +369,83 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
     let patches = rho.len();
     let mut nodes = Vec::new();
     let mut results = 0;
+    let mut at = 0;
     loop {
-        match r.int()? {
-            tag::END => break,
-            tag::SHOT => {
-                let [shots, src, ffs, rays, micros] = [(); 5].map(|_| r.int());
-                let (shots, src) = (shots? as u64, src? as usize);
-                let shot = DVec3::new(r.real64()?, r.real64()?, r.real64()?);
-                let count = r.int()? as usize;
+        let Some((message, len)) = Message::decode(&bytes[at..])
+            .map_err(|e| anyhow::anyhow!("{e} (at byte {at} of its output)"))?
+        else {
+            anyhow::bail!("carm.occ's output ends early (at byte {at})");
+        };
+        at += len;
+        match message {
+            Message::End => break,
+            Message::Shot {
+                shots,
+                src,
+                form_factors,
+                rays,
+                micros,
+                shot,
+                received,
+                ..
+            } => {
                 anyhow::ensure!(
-                    count == 3 * patches && src < patches,
-                    "carm.occ reported a shot of patch {src} with {count} received values"
+                    received.len() == patches && src < patches,
+                    "carm.occ reported a shot of patch {src} with {} received values",
+                    3 * received.len()
                 );
-                let mut received = DVec3::ZERO;
+                let mut total = DVec3::ZERO;
                 let mut absorbed = DVec3::ZERO;
                 solver.unshot[src] -= shot;
-                for (p, rho) in rho.iter().enumerate() {
-                    let power = DVec3::new(r.real64()?, r.real64()?, r.real64()?);
-                    received += power;
-                    absorbed += power * (DVec3::ONE - *rho);
-                    solver.unshot[p] += power * *rho;
+                for ((power, rho), unshot) in received.iter().zip(&rho).zip(&mut solver.unshot) {
+                    total += *power;
+                    absorbed += *power * (DVec3::ONE - *rho);
+                    *unshot += *power * *rho;
                 }
                 let acc = &mut solver.accounts;
                 for c in 0..3 {
                     acc.absorbed[c] += absorbed[c];
-                    acc.escaped[c] += shot[c] - received[c];
+                    acc.escaped[c] += shot[c] - total[c];
                 }
                 let unshot = solver.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
                 acc.unshot = unshot.to_array();
                 solver.stats.shots = shots;
-                solver.stats.form_factors += ffs? as u64;
-                solver.stats.rays += rays? as u64;
+                solver.stats.form_factors += form_factors;
+                solver.stats.rays += rays;
                 solver.history.push(ConvergencePoint {
                     shots,
-                    seconds: micros? as u32 as f64 * 1e-6,
+                    seconds: micros as f64 * 1e-6,
                     unshot_fraction: solver.unshot_fraction(),
                     vertices: solver.mesh.vertices.len(),
                 });
                 solver.rms_history.push(None);
             }
-            tag::RESULT => {
-                let g = r.int()? as usize;
-                let h = Vec3::new(r.real32()?, r.real32()?, r.real32()?);
+            Message::Result(g, h) => {
                 let slot = solver.irradiance.get_mut(g).ok_or_else(|| {
                     anyhow::anyhow!("carm.occ reported sample point {g}, which does not exist")
                 })?;
                 *slot = h;
                 results += 1;
             }
-            tag::COUNTERS => {
-                let mut c = [0u64; 5];
-                for x in &mut c {
-                    *x = r.int()? as u64;
-                }
-                nodes.push(c);
-            }
-            tag::PATCHES => {
-                let count = r.int()? as usize;
+            Message::Counters(c) => nodes.push(c),
+            Message::Patches(theirs) => {
                 anyhow::ensure!(
-                    count == 3 * patches,
-                    "carm.occ reported {count} patch values"
+                    theirs.len() == patches,
+                    "carm.occ reported {} patch values",
+                    3 * theirs.len()
                 );
-                for (p, u) in solver.unshot.iter().enumerate() {
-                    let theirs = DVec3::new(r.real64()?, r.real64()?, r.real64()?);
+                for (p, (theirs, u)) in theirs.iter().zip(&solver.unshot).enumerate() {
                     anyhow::ensure!(
-                        theirs == *u,
+                        theirs == u,
                         "carm.occ's unshot power of patch {p} ({theirs}) disagrees with its shot \
                          record ({u})"
                     );
                 }
             }
-            tag::REFUSED => {
-                let [t, p, v, s, n] = [(); 5].map(|_| r.int().unwrap_or(0));
-                anyhow::bail!(
-                    "the scene is over carm.occ's capacities: at most {t} triangles, {p} \
-                     patches, {v} sample points, {s} rays per form factor and {n} nodes"
-                );
-            }
-            other => anyhow::bail!(
-                "carm.occ wrote an unknown host message tag {other} at byte {} (first bytes {:?})",
-                r.at - 4,
-                &bytes[..bytes.len().min(64)]
+            Message::Refused([t, p, v, s, n, e, k]) => anyhow::bail!(
+                "the scene is over carm.occ's capacities: at most {t} triangles, {p} patches, \
+                 {v} sample points, {e} elements ({k} in one patch), {s} rays per form factor \
+                 and {n} nodes"
             ),
         }
     }
@@ -397,29 +520,71 @@ impl Writer {
     }
 }
 
+/// The root's output ended inside a message (or, with `Reader::short` false, held an unknown tag).
+struct Short;
+
 /// Little-endian reader of the root's output.
 struct Reader<'a> {
     bytes: &'a [u8],
     at: usize,
+    /// Whether a read ran past the end.
+    short: bool,
 }
 
 impl Reader<'_> {
-    fn take<const N: usize>(&mut self) -> anyhow::Result<[u8; N]> {
-        let b = self
-            .bytes
-            .get(self.at..self.at + N)
-            .ok_or_else(|| anyhow::anyhow!("carm.occ's output ends early (at byte {})", self.at))?;
+    fn take<const N: usize>(&mut self) -> Result<[u8; N], Short> {
+        let Some(b) = self.bytes.get(self.at..self.at + N) else {
+            self.short = true;
+            return Err(Short);
+        };
         self.at += N;
         Ok(b.try_into().expect("N bytes"))
     }
-    fn int(&mut self) -> anyhow::Result<i32> {
+    fn int(&mut self) -> Result<i32, Short> {
         Ok(i32::from_le_bytes(self.take()?))
     }
-    fn real32(&mut self) -> anyhow::Result<f32> {
+    fn real32(&mut self) -> Result<f32, Short> {
         Ok(f32::from_le_bytes(self.take()?))
     }
-    fn real64(&mut self) -> anyhow::Result<f64> {
+    fn real64(&mut self) -> Result<f64, Short> {
         Ok(f64::from_le_bytes(self.take()?))
+    }
+}
+
+/// The root's screen: keeps every byte for [`book`] and tells `on_shot` of each shot as it
+/// arrives (until the output stops making sense, which [`book`] then reports).
+struct Screen {
+    bytes: SharedBuf,
+    /// Bytes decoded so far.
+    decoded: usize,
+    on_shot: Option<OnShot>,
+}
+
+impl std::io::Write for Screen {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        let mut bytes = self.bytes.0.lock().unwrap_or_else(|e| e.into_inner());
+        bytes.extend_from_slice(b);
+        while let Some(on_shot) = &mut self.on_shot {
+            match Message::decode(&bytes[self.decoded..]) {
+                Ok(Some((message, len))) => {
+                    self.decoded += len;
+                    if let Message::Shot {
+                        shots,
+                        unshot_fraction,
+                        ..
+                    } = message
+                    {
+                        on_shot(shots, unshot_fraction);
+                    }
+                }
+                Ok(None) => break,
+                Err(_) => self.on_shot = None,
+            }
+        }
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
     }
 }
 

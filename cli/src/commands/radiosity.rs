@@ -64,6 +64,10 @@ pub struct Args {
     /// OS threads running carm.occ's nodes (default: one per core); 1 repeats runs exactly.
     #[arg(long)]
     pub threads: Option<usize>,
+    /// The node program `--solver carm` runs instead of the embedded carm.occ: any occam
+    /// program that speaks its host protocol (programs/README.md).
+    #[arg(long, value_name = "FILE.occ")]
+    pub program: Option<PathBuf>,
     /// Longest patch (shooter) edge; default: scene diagonal / 4.
     #[arg(long)]
     pub patch_size: Option<f32>,
@@ -230,11 +234,22 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                     args.nodes, args.until
                 ),
             );
+            let program = match &args.program {
+                Some(path) => {
+                    let text = std::fs::read_to_string(path)
+                        .with_context(|| format!("--program: cannot read {}", path.display()))?;
+                    Some((path.display().to_string(), text))
+                }
+                None => None,
+            };
             let settings = carm::CarmSettings {
                 nodes: args.nodes,
                 threads,
+                program,
             };
-            Some(carm::solve(&mut solver, settings)?)
+            let report = carm::solve(&mut solver, &settings, Box::new(progress.on_shot()))?;
+            progress.done();
+            Some(report)
         }
     };
     let timings = report::Timings {
@@ -338,6 +353,39 @@ impl Progress {
         }
     }
 
+    /// What to call after each shot with the shots so far and the unshot fraction: it shows a
+    /// line that rewrites itself ten times a second on a terminal, otherwise a line every five
+    /// seconds.
+    fn on_shot(&self) -> impl FnMut(u64, f64) + Send + 'static {
+        let terminal = self.terminal;
+        let start = Instant::now();
+        let mut last = 0.0;
+        let every = if terminal { 0.1 } else { 5.0 };
+        move |shots, unshot| {
+            let now = start.elapsed().as_secs_f64();
+            if now - last > every {
+                last = now;
+                let line = format!(
+                    "  shot {shots:>6}  unshot {:>8.5}%  {now:>6.1} s",
+                    unshot * 100.0
+                );
+                if terminal {
+                    eprint!("\r{line} ");
+                    let _ = std::io::stderr().flush();
+                } else {
+                    eprintln!("{line}");
+                }
+            }
+        }
+    }
+
+    /// Ends the progress line.
+    fn done(&self) {
+        if self.terminal {
+            eprintln!();
+        }
+    }
+
     fn stage(&self, stage: &str, detail: &str) {
         eprintln!(
             "[{:>7.1} s] {stage}{}{detail}",
@@ -432,6 +480,10 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
         );
     }
     anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
+    anyhow::ensure!(
+        args.program.is_none() || matches!(args.solver, SolverKind::Carm),
+        "--program names a node program for --solver carm"
+    );
     for (flag, v) in [
         ("--patch-size", args.patch_size),
         ("--element-size", args.element_size),
@@ -491,32 +543,10 @@ fn load_scene(path: Option<&Path>) -> anyhow::Result<(String, Scene)> {
     Ok((name, scene))
 }
 
-/// Runs the solver, showing progress: a line that rewrites itself ten times a second on a
-/// terminal, otherwise a line every five seconds.
+/// Runs the solver, showing its progress.
 fn solve(solver: &mut Solver, progress: &Progress) {
-    let terminal = progress.terminal;
-    let start = Instant::now();
-    let mut last = 0.0;
-    let every = if terminal { 0.1 } else { 5.0 };
-    solver.run(|shots, unshot| {
-        let now = start.elapsed().as_secs_f64();
-        if now - last > every {
-            last = now;
-            let line = format!(
-                "  shot {shots:>6}  unshot {:>8.5}%  {now:>6.1} s",
-                unshot * 100.0
-            );
-            if terminal {
-                eprint!("\r{line} ");
-                let _ = std::io::stderr().flush();
-            } else {
-                eprintln!("{line}");
-            }
-        }
-    });
-    if terminal {
-        eprintln!();
-    }
+    solver.run(progress.on_shot());
+    progress.done();
 }
 
 fn write_outputs(

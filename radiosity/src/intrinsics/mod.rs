@@ -32,7 +32,7 @@ use crate::rng::Pcg32;
 pub const MAX_SAMPLES: Word = 1 << 16;
 
 /// Stream of the sample generator (the solver's kernels use the same).
-const SAMPLE_STREAM: u64 = 0x5eed;
+pub(crate) const SAMPLE_STREAM: u64 = 0x5eed;
 
 /// The radiosity intrinsics, for the driver's `IntrinsicSet`.
 pub static INTRINSICS: &[Intrinsic] = &[
@@ -100,10 +100,68 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: shadow_rays_batch as *const u8,
     },
     Intrinsic {
+        name: "RAD.SOURCE.DENSITY",
+        params: &[ValReal32s, ValReal32s, ValReal32s, VarReal32s, ResultInt],
+        result: None,
+        addr: weighted::source_density as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.SOURCE.SAMPLES.WEIGHTED.AT",
+        params: &[
+            ValReal32s, ValInt, ValInt, ValInt, ValReal32s, VarReal32s, VarReal32s, ResultInt,
+        ],
+        result: None,
+        addr: weighted::source_samples_weighted_at as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.SHOT.RAYS",
+        params: &[ValInt, ValReal64, ValReal64, ValReal64, ResultInt],
+        result: None,
+        addr: weighted::shot_rays as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.RECEIVER.SAMPLES",
+        params: &[
+            ValReal32s, ValReal32s, ValReal32s, ValInt, ValInt, ValInt, ValInt, ValReal32s,
+            VarReal32s, VarReal32s, ResultInt,
+        ],
+        result: None,
+        addr: weighted::receiver_samples_at as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.FORM.FACTOR.WEIGHTED",
+        params: &[
+            ValReal32s,
+            ValReal32s,
+            ValReal32s,
+            ValReal32s,
+            ValReal32s,
+            ValBools,
+            ResultReal32,
+        ],
+        result: None,
+        addr: weighted::form_factor_weighted_visible as *const u8,
+    },
+    Intrinsic {
         name: "RAD.VOXEL.OCCLUDED",
         params: &[ValReal32s, ValReal32s, VarBools, ResultInt],
         result: None,
         addr: voxel_occluded as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.RAYS.WALK",
+        params: &[
+            ValInts, ValReal32s, ValInts, ValReal32s, ValReal32s, VarBools, VarInts, VarInts,
+            ResultInt,
+        ],
+        result: None,
+        addr: walk::rays_walk as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.VOXEL.OF.POINT",
+        params: &[ValInts, ValReal32s, ValReal32s, ResultInt],
+        result: None,
+        addr: walk::voxel_of_point as *const u8,
     },
 ];
 
@@ -553,6 +611,9 @@ pub unsafe extern "C" fn shadow_rays_batch(
 
 #[cfg(test)]
 mod test;
+pub mod weighted;
+
+mod walk;
 
 /// `RAD.VOXEL.OCCLUDED (VAL []REAL32 voxel, VAL []REAL32 rays, []BOOL blocked, RESULT INT
 /// count)`: the rays (8 floats each, as `RAD.SHADOW.RAYS` writes them) that the triangles of one

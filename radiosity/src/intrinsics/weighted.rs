@@ -1,0 +1,345 @@
+//! Intrinsics for a source that shoots unevenly (issue 10, cause 4): a patch shoots what each of
+//! its elements holds, not its average, so its samples carry weights. `RAD.SOURCE.DENSITY`
+//! tabulates a patch from its elements' unshot radiosity, `RAD.SOURCE.SAMPLES.WEIGHTED.AT` draws
+//! the samples with their weights, and `RAD.FORM.FACTOR.WEIGHTED` weighs the visible ones, each
+//! exactly as the Rust solver does it ([`SourceDensity::of_parts`], [`source_samples_weighted`],
+//! [`form_factor_weighted`]). An empty density stands for a uniform source (no weights).
+
+use glam::Vec3;
+use occ_runtime::abi::Word;
+
+use super::{MAX_SAMPLES, MAX_SKIPPED_SETS, SAMPLE_STREAM, array, point, points, triangle};
+use crate::formfactor::{
+    FormFactorConfig, SourceDensity, form_factor_weighted, receiver_samples, sample_grid,
+    source_samples_weighted,
+};
+use crate::geom::Tri;
+use crate::rng::Pcg32;
+use crate::solver::{DENSITY_GRID, far_rays};
+
+/// Cells `RAD.SOURCE.DENSITY` writes for a non-uniform source.
+pub const DENSITY_CELLS: Word = (DENSITY_GRID * DENSITY_GRID) as Word;
+
+/// `PROC RAD.SOURCE.DENSITY (VAL []REAL32 patch, VAL []REAL32 elements, VAL []REAL32 density,
+/// []REAL32 grid, RESULT INT cells)`: how the unshot radiosity of the source `patch` (9 floats)
+/// varies over it, from its k elements (`elements`: 9k floats, three corners each, in the
+/// solver's element order) and each element's unshot power over its area, channels summed
+/// (`density`: k floats). Writes the [`DENSITY_CELLS`] cells of the grid to the start of `grid`
+/// and answers their number, or 0 (grid untouched) when the source is uniform or has fewer than
+/// two elements, or -1 when a length is wrong (`grid` shorter than [`DENSITY_CELLS`] included).
+///
+/// # Safety
+/// The arrays are valid for their lengths and `cells` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn source_density(
+    patch: *const f32,
+    patch_len: Word,
+    elements: *const f32,
+    elements_len: Word,
+    density: *const f32,
+    density_len: Word,
+    grid: *mut f32,
+    grid_len: Word,
+    cells: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (patch, elements, density) = unsafe {
+        (
+            triangle(array(patch, patch_len)),
+            array(elements, elements_len),
+            array(density, density_len),
+        )
+    };
+    let parts = (elements.len() == 9 * density.len()).then(|| {
+        elements
+            .chunks_exact(9)
+            .zip(density)
+            .map(|(t, &d)| triangle(t).map(|t| (t, d)))
+            .collect::<Option<Vec<(Tri, f32)>>>()
+    });
+    let written = match (patch, parts.flatten()) {
+        (Some(patch), Some(parts)) if grid_len >= DENSITY_CELLS => {
+            match SourceDensity::of_parts(&patch, DENSITY_GRID, &parts) {
+                Some(d) => {
+                    // SAFETY: `grid` is valid for `grid_len` >= DENSITY_CELLS floats.
+                    let out = unsafe { std::slice::from_raw_parts_mut(grid, d.cells().len()) };
+                    out.copy_from_slice(d.cells());
+                    DENSITY_CELLS
+                }
+                None => 0,
+            }
+        }
+        _ => -1,
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *cells = written };
+}
+
+/// `PROC RAD.SOURCE.SAMPLES.WEIGHTED.AT (VAL []REAL32 tri, VAL INT m, VAL INT64 seed,
+/// VAL INT set, VAL []REAL32 grid, []REAL32 out, []REAL32 weights, RESULT INT count)`:
+/// `RAD.SOURCE.SAMPLES.AT` (the same points) and, when `grid` holds a density from
+/// `RAD.SOURCE.DENSITY`, the relative unshot radiosity at each sample in `weights` (one float per
+/// sample; `weights` untouched when `grid` is empty). `count` is -1 (and nothing written) as for
+/// `RAD.SOURCE.SAMPLES.AT`, and when `grid` is neither empty nor a density, or `weights` is
+/// shorter than the samples.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn source_samples_weighted_at(
+    tri: *const f32,
+    tri_len: Word,
+    m: Word,
+    seed: Word,
+    set: Word,
+    grid: *const f32,
+    grid_len: Word,
+    out: *mut f32,
+    out_len: Word,
+    weights: *mut f32,
+    weights_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (tri, grid) = unsafe { (triangle(array(tri, tri_len)), array(grid, grid_len)) };
+    let density = SourceDensity::from_cells(grid);
+    let valid = (1..=MAX_SAMPLES).contains(&m)
+        && (0..=MAX_SKIPPED_SETS).contains(&set)
+        && (grid.is_empty() || density.is_some());
+    let (mut samples, mut w) = (Vec::new(), Vec::new());
+    if let Some(tri) = tri.filter(|_| valid) {
+        let mut rng = Pcg32::new(seed as u64, SAMPLE_STREAM);
+        // Each set draws two numbers per sample of a k x k grid, weighted or not.
+        let k = u64::from(sample_grid(m as u32));
+        rng.advance(set as u64 * 2 * k * k);
+        source_samples_weighted(
+            &tri,
+            m as u32,
+            density.as_ref(),
+            &mut rng,
+            &mut samples,
+            &mut w,
+        );
+    }
+    let floats = 3 * samples.len();
+    let fits = floats as Word <= out_len && w.len() as Word <= weights_len;
+    let written = if samples.is_empty() || !fits {
+        -1
+    } else {
+        // SAFETY: `out` is valid for `out_len` >= `floats` floats, `weights` for `w.len()`.
+        let (out, weights) = unsafe {
+            (
+                std::slice::from_raw_parts_mut(out, floats),
+                std::slice::from_raw_parts_mut(weights, w.len()),
+            )
+        };
+        for (o, s) in out.chunks_exact_mut(3).zip(&samples) {
+            o.copy_from_slice(&s.to_array());
+        }
+        weights.copy_from_slice(&w);
+        samples.len() as Word
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
+/// `PROC RAD.FORM.FACTOR.WEIGHTED (VAL []REAL32 point, normal, VAL []REAL32 tri,
+/// VAL []REAL32 samples, weights, VAL []BOOL visible, RESULT REAL32 f)`: `RAD.FORM.FACTOR` for
+/// a source whose samples carry the weights `RAD.SOURCE.SAMPLES.WEIGHTED.AT` gave them (m
+/// floats, or none for a uniform source): the form factor times the mean relative radiosity the
+/// receiver sees, as the Rust solver computes it. `f` is -1.0 when a length is wrong.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `f` for one REAL32 (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn form_factor_weighted_visible(
+    p: *const f32,
+    p_len: Word,
+    n: *const f32,
+    n_len: Word,
+    tri: *const f32,
+    tri_len: Word,
+    samples: *const f32,
+    samples_len: Word,
+    weights: *const f32,
+    weights_len: Word,
+    visible: *const u8,
+    visible_len: Word,
+    f: *mut f32,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (p, n, tri, samples, weights, visible) = unsafe {
+        (
+            point(array(p, p_len)),
+            point(array(n, n_len)),
+            triangle(array(tri, tri_len)),
+            points(array(samples, samples_len)),
+            array(weights, weights_len),
+            array(visible, visible_len),
+        )
+    };
+    let value = match (p, n, tri, samples) {
+        (Some(p), Some(n), Some(tri), Some(s))
+            if !s.is_empty()
+                && s.len() == visible.len()
+                && (weights.is_empty() || weights.len() == s.len()) =>
+        {
+            weighted_form_factor(p, n, &tri, &s, weights, visible)
+        }
+        _ => -1.0,
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *f = value };
+}
+
+/// One receiver's weighted form factor given the visibility flag of each sample's ray.
+fn weighted_form_factor(
+    p: Vec3,
+    n: Vec3,
+    tri: &Tri,
+    samples: &[Vec3],
+    weights: &[f32],
+    visible: &[u8],
+) -> f32 {
+    let config = FormFactorConfig::default();
+    form_factor_weighted(p, n, tri, samples, weights, &config, |k, _, _, _| {
+        visible[k] == 0
+    })
+    .value
+}
+
+/// `PROC RAD.SHOT.RAYS (VAL INT rays, VAL REAL64 shot, emitted, full.power, RESULT INT far)`:
+/// the rays per far form factor of a shot of `shot` power (channels summed) in a scene emitting
+/// `emitted` (channels summed) when shots of at least `full.power` of it cast all `rays`
+/// ([`far_rays`]; the solver's `full_rays_power`, 0: always `rays`): the `far.rays` argument of
+/// `RAD.RECEIVER.SAMPLES`. `far` is -1 when `rays` is not in 1..=65536 or a power is negative
+/// or not finite.
+///
+/// # Safety
+/// `far` is valid for one word (the occam ABI).
+pub unsafe extern "C" fn shot_rays(
+    rays: Word,
+    shot: f64,
+    emitted: f64,
+    full_power: f64,
+    far: *mut Word,
+) {
+    let valid = (1..=MAX_SAMPLES).contains(&rays)
+        && [shot, emitted, full_power]
+            .iter()
+            .all(|x| x.is_finite() && *x >= 0.0);
+    let value = if valid {
+        far_rays(rays as u32, shot, emitted, full_power) as Word
+    } else {
+        -1
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *far = value };
+}
+
+/// `PROC RAD.RECEIVER.SAMPLES (VAL []REAL32 point, normal, tri, VAL INT rays, far.rays,
+/// VAL INT64 seed, VAL INT set, VAL []REAL32 grid, []REAL32 out, []REAL32 weights,
+/// RESULT INT count)`: the samples of the source `tri` that the receiver `(point, normal)`, the
+/// `set`-th of its batch, casts its rays to, as the solver draws them ([`receiver_samples`]):
+/// `rays` per form factor, `far.rays` to a receiver outside the source's near field that sees
+/// all of it (0: `rays`; `RAD.SHOT.RAYS` gives it), and none to a receiver that does not face
+/// the source (its form factor is 0). Writes `count` points to `out` and, when `grid` holds a
+/// density, their weights to `weights`, as `RAD.SOURCE.SAMPLES.WEIGHTED.AT` does; `count` is 0
+/// for a receiver that does not face the source, and -1 (nothing written) for the wrong
+/// lengths or ranges that `RAD.SOURCE.SAMPLES.WEIGHTED.AT` refuses, or `far.rays` not in
+/// 0..=`rays`.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn receiver_samples_at(
+    p: *const f32,
+    p_len: Word,
+    n: *const f32,
+    n_len: Word,
+    tri: *const f32,
+    tri_len: Word,
+    rays: Word,
+    far: Word,
+    seed: Word,
+    set: Word,
+    grid: *const f32,
+    grid_len: Word,
+    out: *mut f32,
+    out_len: Word,
+    weights: *mut f32,
+    weights_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (p, n, tri, grid) = unsafe {
+        (
+            point(array(p, p_len)),
+            point(array(n, n_len)),
+            triangle(array(tri, tri_len)),
+            array(grid, grid_len),
+        )
+    };
+    let density = SourceDensity::from_cells(grid);
+    let valid = (1..=MAX_SAMPLES).contains(&rays)
+        && (0..=rays).contains(&far)
+        && (0..=MAX_SKIPPED_SETS).contains(&set)
+        && (grid.is_empty() || density.is_some());
+    let drawn = match (p, n, tri) {
+        (Some(p), Some(n), Some(tri)) if valid => {
+            let config = FormFactorConfig {
+                rays: rays as u32,
+                far_rays: far as u32,
+                ..FormFactorConfig::default()
+            };
+            let mut rng = Pcg32::new(seed as u64, SAMPLE_STREAM);
+            rng.advance(set as u64 * 2 * u64::from(sample_grid(config.rays)).pow(2));
+            let (mut samples, mut w) = (Vec::new(), Vec::new());
+            let density = density.as_ref();
+            receiver_samples(
+                (p, n),
+                &tri,
+                &config,
+                density,
+                &mut rng,
+                &mut samples,
+                &mut w,
+            );
+            Some((samples, w))
+        }
+        _ => None,
+    };
+    let written = match drawn {
+        Some((samples, w))
+            if 3 * samples.len() as Word <= out_len && w.len() as Word <= weights_len =>
+        {
+            // SAFETY: `out` is valid for `out_len` >= 3 × samples floats, `weights` for `w.len()`.
+            let (out, weights) = unsafe {
+                (
+                    std::slice::from_raw_parts_mut(out, 3 * samples.len()),
+                    std::slice::from_raw_parts_mut(weights, w.len()),
+                )
+            };
+            for (o, s) in out.chunks_exact_mut(3).zip(&samples) {
+                o.copy_from_slice(&s.to_array());
+            }
+            weights.copy_from_slice(&w);
+            samples.len() as Word
+        }
+        _ => -1,
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
