@@ -7,9 +7,13 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 /// The same settings for both solvers: a coarse mesh and few rays so that a debug build solves
-/// in seconds; no adaptive subdivision (carm.occ does not subdivide yet).
+/// in seconds; no adaptive subdivision (carm.occ does not subdivide yet); every shot casts all
+/// its rays (carm.occ does not yet cast fewer to far receivers for weak shots, as the reference
+/// solver does by default: `RAD.SHOT.RAYS` and `RAD.RECEIVER.SAMPLES` let it).
 const SETTINGS: &[&str] = &[
     "--no-adapt",
+    "--full-rays-power",
+    "0",
     "--rays",
     "4",
     "--element-size",

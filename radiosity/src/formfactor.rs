@@ -241,22 +241,19 @@ pub fn faces(p: Vec3, n: Vec3, src: &Tri) -> bool {
 }
 
 /// Shadow rays the receiver `(p, n)` casts to the source `src`: none when it does not face it
-/// ([`faces`]); [`FormFactorConfig::far_rays`] (at most `rays`) when it is outside the source's
-/// near field ([`NEAR_FIELD`]) and sees all of it above its horizon, and `far_rays` is not 0;
-/// else [`FormFactorConfig::rays`]. The solver's kernels and `RAD.RECEIVER.RAYS` both ask this.
+/// ([`faces`]); [`FormFactorConfig::far_rays`] when that is fewer than `rays` (and not 0) and
+/// the receiver is outside the source's near field ([`NEAR_FIELD`]) and sees all of it above
+/// its horizon; else [`FormFactorConfig::rays`]. The solver's kernels and
+/// `RAD.RECEIVER.SAMPLES` ask this.
 pub fn receiver_rays(p: Vec3, n: Vec3, src: &Tri, config: &FormFactorConfig) -> u32 {
     if !faces(p, n, src) {
         return 0;
     }
     let near2 = NEAR_FIELD * NEAR_FIELD * src.area();
-    let far = config.far_rays > 0
+    let far = (1..config.rays).contains(&config.far_rays)
         && src.v.iter().all(|v| n.dot(*v - p) > 0.0)
         && (src.closest_point(p) - p).length_squared() >= near2;
-    if far {
-        config.far_rays.min(config.rays)
-    } else {
-        config.rays
-    }
+    if far { config.far_rays } else { config.rays }
 }
 
 /// Draws the weighted samples of `src` ([`source_samples_weighted`]) that the receiver `(p, n)`
