@@ -40,8 +40,8 @@ pub const ERROR_MARGIN: f64 = 0.5;
 /// least noise overall are in proportion to each shot's power. The first shots (the lights and
 /// the brightest patches) carry several percent each and keep all their rays; the hundreds of
 /// shots that finish a solve carry hundredths of a percent each and cast one ray to each far
-/// receiver. On the Cornell box at the defaults this takes 2.3 times less time for the same
-/// answers (`radiosity/REFERENCES.md`).
+/// receiver. On the Cornell box at the defaults this takes about half the time, with the large
+/// surfaces' answers as close to the path-traced reference (`radiosity/REFERENCES.md`).
 pub const FULL_RAYS_POWER: f64 = 0.01;
 
 /// Shadow rays per far form factor ([`FormFactorConfig::far_rays`]) for a shot of `shot` power
