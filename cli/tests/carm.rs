@@ -18,19 +18,28 @@ const SETTINGS: &[&str] = &[
     "4",
     "--element-size",
     "150",
-    "--until",
-    "unshot=0.05",
     "--image-size",
     "16",
 ];
 
-/// Runs `occ radiosity` with `extra` flags into `out`; returns its report.json.
+/// Runs `occ radiosity` with `extra` flags into `out` (until 5% of the power is left unshot,
+/// unless `extra` gives another `--until`); returns its report.json.
 fn radiosity(out: &Path, extra: &[&str]) -> serde_json::Value {
+    let until: &[&str] = if extra.contains(&"--until") {
+        &[]
+    } else {
+        &["--until", "unshot=0.05"]
+    };
+    radiosity_with(out, &[SETTINGS, until].concat(), extra)
+}
+
+/// Runs `occ radiosity` with `settings`, then `extra`, into `out`; returns its report.json.
+fn radiosity_with(out: &Path, settings: &[&str], extra: &[&str]) -> serde_json::Value {
     let output = Command::new(env!("CARGO_BIN_EXE_occ"))
         .arg("radiosity")
         .arg("--out")
         .arg(out)
-        .args(SETTINGS)
+        .args(settings)
         .args(extra)
         .output()
         .expect("the occ binary runs");
@@ -141,6 +150,83 @@ fn carm_on_1_4_13_and_40_nodes_agrees_with_the_reference_solver() {
     }
 }
 
+/// A scene whose octree has several voxels, so that shadow rays walk from voxel to voxel.
+#[test]
+fn carm_walks_a_many_voxel_octree_as_the_reference_solver() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
+    let settings = [
+        scene,
+        "--no-adapt",
+        "--rays",
+        "4",
+        "--element-size",
+        "1",
+        "--until",
+        "unshot=0.05",
+        "--image-size",
+        "16",
+    ];
+    let reference = radiosity_with(&scratch("carm-lamp-reference"), &settings, &[]);
+    let leaves = reference["scene"]["octree"]["leaves"]
+        .as_u64()
+        .expect("leaves");
+    assert!(leaves > 1, "the table lamp's octree has {leaves} leaf");
+    let carm = radiosity_with(
+        &scratch("carm-lamp"),
+        &settings,
+        &["--solver", "carm", "--nodes", "4", "--threads", "1"],
+    );
+    // Every node holds every voxel (geometry is replicated), and says so.
+    for node in carm["nodes"].as_array().expect("nodes") {
+        let voxels = node["voxels"].as_u64().expect("voxels");
+        assert!(voxels > 1 && voxels <= leaves, "{node}");
+        assert!(
+            node["voxel_bytes"].as_u64().expect("voxel bytes") > 0,
+            "{node}"
+        );
+        assert_eq!(node["voxels"], carm["nodes"][0]["voxels"]);
+        assert_eq!(node["voxel_bytes"], carm["nodes"][0]["voxel_bytes"]);
+    }
+    for ((name, b), (_, r)) in means(&carm).iter().zip(&means(&reference)) {
+        assert!(
+            apart(b, r) <= 0.01,
+            "{name}: carm {b:?} against reference {r:?} ({:.3}% apart)",
+            100.0 * apart(b, r)
+        );
+    }
+}
+
+#[test]
+fn carm_stops_on_the_error_estimate_where_the_reference_solver_does() {
+    let until = ["--until", "error=0.05"];
+    let reference = radiosity(
+        &scratch("carm-error-reference"),
+        &[&["--solver", "reference"][..], &until].concat(),
+    );
+    let carm = radiosity(
+        &scratch("carm-error"),
+        &[
+            &["--solver", "carm", "--nodes", "4", "--threads", "1"][..],
+            &until,
+        ]
+        .concat(),
+    );
+    let left = |r: &serde_json::Value| r["totals"]["unshot_fraction"].as_f64().expect("a number");
+    // The same shots: the same power left, up to the order of the sums of received power
+    // (parts in 1e8 here; one shot more or less would move it by parts in 100).
+    assert!(
+        (left(&carm) - left(&reference)).abs() <= 1e-6 * left(&reference),
+        "carm left {} unshot, the reference {}",
+        left(&carm),
+        left(&reference)
+    );
+    // Stopped on the estimate, with power still unshot.
+    assert!(left(&reference) > 0.0);
+    for ((name, b), (_, r)) in means(&carm).iter().zip(&means(&reference)) {
+        assert!(apart(b, r) <= 0.01, "{name}: carm {b:?} against {r:?}");
+    }
+}
+
 #[test]
 fn carm_refuses_what_it_cannot_do_clearly() {
     let out = scratch("carm-refusals");
@@ -148,7 +234,7 @@ fn carm_refuses_what_it_cannot_do_clearly() {
         (&["--solver", "carm"][..], "--no-adapt"),
         (
             &["--solver", "carm", "--no-adapt", "--until", "time=1"][..],
-            "--until unshot=F or shots=N",
+            "takes --until error=F, unshot=F or shots=N",
         ),
         (
             &[
@@ -173,7 +259,8 @@ fn carm_refuses_what_it_cannot_do_clearly() {
                 "--element-size",
                 "8",
             ][..],
-            "over carm.occ's capacities: at most 4096 triangles, 2048 patches, 16384 sample points",
+            "over carm.occ's capacities: at most an octree of 65536 tree INTs and 8192 voxels \
+             of 262144 REAL32s in all (16384 in one), 2048 patches, 16384 sample points",
         ),
     ] {
         let output = Command::new(env!("CARGO_BIN_EXE_occ"))

@@ -88,3 +88,74 @@ fn deadlock_across_ranks_is_reported_per_node() {
     }
     assert_eq!(o.status.code(), Some(1));
 }
+
+/// `occ radiosity --solver carm` on 13 nodes (`--threads 1`) into `out`, in this process or
+/// spread over four MPI ranks; returns report.json's per-object mean B and rank 0's stderr.
+fn carm(mpi: bool, out: &std::path::Path) -> (Vec<serde_json::Value>, String) {
+    let _ = std::fs::remove_dir_all(out);
+    let occ = env!("CARGO_BIN_EXE_occ");
+    let args = [
+        "radiosity",
+        "--solver",
+        "carm",
+        "--nodes",
+        "13",
+        "--threads",
+        "1",
+        "--no-adapt",
+        "--rays",
+        "4",
+        "--element-size",
+        "150",
+        "--until",
+        "unshot=0.05",
+        "--image-size",
+        "16",
+        "--out",
+    ];
+    let mut cmd = if mpi {
+        let mut c = Command::new("mpirun");
+        c.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+            .args(["--oversubscribe", "-np", RANKS, occ])
+            .args(args)
+            .arg(out)
+            .args(["--transport", "mpi"]);
+        c
+    } else {
+        let mut c = Command::new(occ);
+        c.args(args).arg(out);
+        c
+    };
+    let o = cmd
+        .output()
+        .unwrap_or_else(|e| panic!("cannot start {cmd:?} (is OpenMPI installed?): {e}"));
+    let err = own_stderr(&o);
+    assert!(o.status.success(), "{cmd:?} failed:\n{err}");
+    let text = std::fs::read_to_string(out.join("report.json")).expect("report.json written");
+    let report: serde_json::Value = serde_json::from_str(&text).expect("report.json parses");
+    let means = report["objects"]
+        .as_array()
+        .expect("objects")
+        .iter()
+        .map(|o| o["mean_b"].clone())
+        .collect();
+    assert_eq!(report["solver"], "carm");
+    assert_eq!(
+        report["nodes"].as_array().map(Vec::len),
+        Some(13),
+        "every node's counters reach rank 0"
+    );
+    (means, err)
+}
+
+#[test]
+fn carm_across_four_ranks_gives_the_in_process_solution() {
+    let tmp = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
+    let (here, _) = carm(false, &tmp.join("carm-inproc"));
+    let (there, err) = carm(true, &tmp.join("carm-mpi"));
+    // The same sums in the same order on every node: the same numbers, bit for bit.
+    assert_eq!(there, here, "per-object means under mpirun");
+    // Only rank 0 speaks: one "shooting" stage line, not one per rank.
+    assert_eq!(err.matches("shooting").count(), 1, "{err}");
+}

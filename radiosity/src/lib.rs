@@ -16,6 +16,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod estimate;
 pub mod formfactor;
 pub mod generate;
 pub mod geom;

@@ -17,6 +17,7 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::estimate::{self, Tally};
 use crate::formfactor::{FormFactorConfig, SourceDensity};
 use crate::geom::Tri;
 use crate::kernels::{SamplePoint, shoot_batch_weighted};
@@ -28,12 +29,6 @@ use crate::scene::Scene;
 /// ([`SourceDensity`]): finer than the elements of a patch at the default sizes (a patch is
 /// about five elements across), so each element's share is seen.
 pub const DENSITY_GRID: u32 = 24;
-
-/// `Until::Error(f)` stops when the estimated error is at most `ERROR_MARGIN × f`. The estimate
-/// spreads the unshot power evenly; in a room lit only through a doorway, which gets less than
-/// its share, the true deficit came out 1.1 times the estimate (`tests/accuracy.rs`), so the rule
-/// keeps a factor of two in hand.
-pub const ERROR_MARGIN: f64 = 0.5;
 
 /// The default [`SolverConfig::full_rays_power`]. The noise a shot leaves at a sample point
 /// is in proportion to its power over the square root of its rays, so the rays that buy the
@@ -67,7 +62,7 @@ pub enum Until {
     /// Stop after this many seconds.
     Seconds(f64),
     /// Stop when the relative error of every object's mean radiosity is at most this: when
-    /// [`Solver::estimated_error`] is at most [`ERROR_MARGIN`] times it.
+    /// [`Solver::estimated_error`] is at most [`estimate::ERROR_MARGIN`] times it.
     Error(f64),
 }
 
@@ -324,7 +319,7 @@ impl<'a> Solver<'a> {
                 Until::Unshot(f) => self.unshot_fraction() <= f,
                 Until::Shots(n) => self.stats.shots >= n,
                 Until::Seconds(s) => start.elapsed().as_secs_f64() >= s,
-                Until::Error(f) => self.estimated_error() <= ERROR_MARGIN * f,
+                Until::Error(f) => estimate::reached(self.estimated_errors(), f),
             };
             if done || self.stats.shots >= self.config.max_shots || !self.shoot_once() {
                 break;
@@ -598,6 +593,14 @@ impl<'a> Solver<'a> {
             self.unshot[e.patch as usize] += power * rho;
             *u += power * rho;
         }
+        self.book_totals(shot, received, absorbed);
+    }
+
+    /// Books a shot's totals into the accounts and the closure of the ambient term: the power
+    /// `shot`, the part of it the surfaces `received`, the part of that they `absorbed`. The
+    /// patches' unshot power must already hold the shot (a solver driven from outside, as by
+    /// carm.occ's host, books each patch's share itself and then calls this).
+    pub fn book_totals(&mut self, shot: DVec3, received: DVec3, absorbed: DVec3) {
         self.shot_total += shot;
         self.received_total += received;
         let acc = &mut self.accounts;
@@ -610,41 +613,27 @@ impl<'a> Solver<'a> {
     }
 
     /// Returns the ambient irradiance: where the unshot power would still go, spread evenly over
-    /// the surfaces. Cohen et al. (1988) take `Σ unshot / Σ A × 1 / (1 - ρ_avg)`, which holds in
-    /// a closed scene; here the share of shot power that surfaces have received so far (`c`,
-    /// below 1 when the scene is open) and the share of that they reflected (`r`) stand for the
-    /// closure and the reflectance: `c Σ unshot / Σ A × 1 / (1 - c r)`. Before the first shot
-    /// `c = 1` and `r = ρ_avg`, Cohen's form.
+    /// the surfaces ([`Tally::ambient`]).
     pub fn ambient(&self) -> Vec3 {
-        let total_area: f64 = self.element_area.iter().sum();
-        let unshot = self.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
-        let (c, r) = self.closure();
-        (unshot * c / total_area / (DVec3::ONE - c * r).max(DVec3::splat(1e-6))).as_vec3()
+        self.tally().ambient()
     }
 
-    /// The received share `c` of shot power and the reflected share `r` of received power, per
-    /// channel (see [`Solver::ambient`]).
-    fn closure(&self) -> (DVec3, DVec3) {
+    /// The running totals the error estimate is made of.
+    pub fn tally(&self) -> Tally {
         let mut rho = DVec3::ZERO;
         let mut total_area = 0.0;
         for (e, &a) in self.mesh.elements.iter().zip(&self.element_area) {
             rho += self.scene.objects[e.object as usize].reflectance.as_dvec3() * a;
             total_area += a;
         }
-        let rho_avg = rho / total_area.max(1e-300);
-        let absorbed = DVec3::from(self.accounts.absorbed);
-        let pick = |num: f64, den: f64, default: f64| if den > 0.0 { num / den } else { default };
-        let c = DVec3::from_array(std::array::from_fn(|i| {
-            pick(self.received_total[i], self.shot_total[i], 1.0)
-        }));
-        let r = DVec3::from_array(std::array::from_fn(|i| {
-            let received = self.received_total[i];
-            pick(received - absorbed[i], received, rho_avg[i])
-        }));
-        (
-            c.clamp(DVec3::ZERO, DVec3::ONE),
-            r.clamp(DVec3::ZERO, DVec3::ONE),
-        )
+        Tally {
+            total_area,
+            rho_avg: rho / total_area.max(1e-300),
+            unshot: self.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u),
+            shot: self.shot_total,
+            received: self.received_total,
+            absorbed: DVec3::from(self.accounts.absorbed),
+        }
     }
 
     /// Estimates each object's relative error: the ambient term's share of its mean radiosity,
@@ -653,16 +642,12 @@ impl<'a> Solver<'a> {
     /// only through a door, not yet reached) have `B` near 0 and so an estimate near 1, which
     /// keeps the solve going until light reaches them.
     pub fn estimated_errors(&self) -> Vec<f64> {
-        let ambient = self.ambient().as_dvec3();
+        let ambient = self.ambient();
         self.object_means()
             .into_iter()
             .zip(&self.scene.objects)
             .map(|((area, b), o)| {
-                let missing = o.reflectance.as_dvec3() * ambient;
-                (0..3)
-                    .filter(|&c| area > 0.0 && missing[c] > 0.0)
-                    .map(|c| missing[c] / (b[c] + missing[c]))
-                    .fold(0.0, f64::max)
+                estimate::object_error(area, b, o.reflectance.as_dvec3(), ambient)
             })
             .collect()
     }

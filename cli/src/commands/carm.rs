@@ -5,8 +5,9 @@
 //! from the root's screen channel, and books them into a [`Solver`] so that the outputs are
 //! written exactly as for the reference solver.
 //!
-//! The host does no radiosity: it sends the scene and its mesh and books what the nodes report
-//! (per shot, the power each patch received; at the end, the irradiance at every sample point).
+//! The host does no radiosity: it sends the reference solver's octree in its flat form (tree,
+//! frame, voxels) and the mesh, and books what the nodes report (per shot, the power each patch
+//! received; at the end, the irradiance at every sample point).
 
 use std::f64::consts::PI;
 use std::io::Cursor;
@@ -15,6 +16,7 @@ use std::sync::{Arc, Mutex};
 use glam::{DVec3, Vec3};
 use occ_codegen::network::{NetworkOptions, NetworkOutcome};
 use occ_radiosity::solver::{ConvergencePoint, Solver, Until};
+use occ_runtime::remote::Transport;
 use occ_runtime::topology::Shape;
 use occ_runtime::{HostIo, NodeConfig};
 
@@ -23,7 +25,7 @@ use crate::frontend::{self, Options};
 /// The node program, embedded so that `occ radiosity` works from any folder.
 pub const PROGRAM: &str = include_str!("../../../programs/carm.occ");
 
-/// Most nodes carm.occ takes (its `MAX.NODES`; each node's arrays take about 3 MB).
+/// Most nodes carm.occ takes (its `MAX.NODES`; each node's arrays take about 9 MB).
 const MAX_NODES: usize = 1024;
 
 /// Loop back-edges per timeslice when `--threads 1` makes runs repeat exactly (as `occ run`).
@@ -67,6 +69,10 @@ pub struct NodeCounters {
     pub form_factors: u64,
     /// Shadow rays it cast.
     pub rays: u64,
+    /// Voxels of the octree it held at the end.
+    pub voxels: u64,
+    /// Their bytes.
+    pub voxel_bytes: u64,
     /// Channel communications (soft and link) it made.
     pub communications: u64,
     /// Fraction of the wall time it spent running processes.
@@ -98,11 +104,16 @@ pub struct CarmReport {
 /// Runs carm.occ on `solver`'s scene and mesh and books its solution into `solver` (irradiance,
 /// unshot power, accounts, convergence record, counters). The solver must be fresh (no shot yet)
 /// and without adaptive subdivision. `on_shot` hears of each shot as the root reports it.
+///
+/// With a `transport` (MPI), every process calls this with the same scene, mesh and settings
+/// and runs its share of the nodes; the one holding node 0 (rank 0) plays the host, books the
+/// solution and gets the report of every node and link, the others get `None`.
 pub fn solve(
     solver: &mut Solver,
     settings: &CarmSettings,
     on_shot: OnShot,
-) -> anyhow::Result<CarmReport> {
+    transport: Option<&mut dyn Transport>,
+) -> anyhow::Result<Option<CarmReport>> {
     anyhow::ensure!(
         solver.config().adapt.is_none(),
         "--solver carm does not subdivide yet: give --no-adapt"
@@ -112,7 +123,12 @@ pub fn solve(
         "--nodes {}: carm.occ runs on 1 to {MAX_NODES} nodes",
         settings.nodes
     );
-    let input = host_input(solver)?;
+    let host_here = transport.as_deref().is_none_or(|t| t.spread().rank == 0);
+    let input = if host_here {
+        host_input(solver)?
+    } else {
+        Vec::new()
+    };
     let compiled = match &settings.program {
         Some((name, text)) => compile(name, text)?,
         None => compile("carm.occ", PROGRAM)?,
@@ -142,8 +158,11 @@ pub fn solve(
         threads: settings.threads,
     };
     let outcome = compiled
-        .run_topology(shape, &opts, host)
+        .run_topology_over(shape, &opts, host, transport)
         .map_err(|e| anyhow::anyhow!("carm.occ: {e}"))?;
+    if !host_here {
+        return Ok(None);
+    }
     let out = screen.take();
     if out.starts_with(&tag::REFUSED.to_le_bytes()) {
         // The controller refused the scene and stopped; the other nodes' fate is no news.
@@ -162,7 +181,7 @@ pub fn solve(
         text
     );
     let nodes = book(solver, &out)?;
-    Ok(report(&outcome, nodes))
+    Ok(Some(report(&outcome, nodes)))
 }
 
 /// Compiles the node program `text` (named `name` in its diagnostics).
@@ -186,23 +205,35 @@ fn compile(name: &str, text: &str) -> anyhow::Result<occ_codegen::Compiled> {
     .map_err(|e| anyhow::anyhow!("{name}: {e}"))
 }
 
-/// The host protocol's input: header, occluders, patches, sample points, elements
-/// (little-endian; INT is 4 bytes, INT64 and REAL64 8, REAL32 4).
+/// The host protocol's input: header, the octree's frame and tree, its voxels, patches, sample
+/// points, elements (little-endian; INT is 4 bytes, INT64 and REAL64 8, REAL32 4). The octree is
+/// the reference solver's own, in its flat form, so the nodes' shadow rays meet what its rays do.
 fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     let config = solver.config();
     let (scene, mesh) = (solver.scene, &solver.mesh);
-    let (until_unshot, max_shots) = match config.until {
-        Until::Unshot(f) => (f, config.max_shots),
-        Until::Shots(n) => (-1.0, n.min(config.max_shots)),
-        Until::Seconds(_) | Until::Error(_) => {
-            anyhow::bail!("--solver carm takes --until unshot=F or shots=N")
+    // Negative: not a stopping rule of this run.
+    let (until_unshot, until_error, max_shots) = match config.until {
+        Until::Unshot(f) => (f, -1.0, config.max_shots),
+        Until::Error(f) => (-1.0, f, config.max_shots),
+        Until::Shots(n) => (-1.0, -1.0, n.min(config.max_shots)),
+        Until::Seconds(_) => {
+            anyhow::bail!("--solver carm takes --until error=F, unshot=F or shots=N")
         }
     };
     let int = |n: usize, what: &str| {
         i32::try_from(n).map_err(|_| anyhow::anyhow!("{what} ({n}) is too many for carm.occ"))
     };
+    let flat = solver
+        .octree
+        .flat()
+        .map_err(|e| anyhow::anyhow!("carm.occ cannot take the scene's octree: {e}"))?;
+    let voxels = flat.voxel_count();
+    let largest = (0..voxels).map(|v| flat.voxel(v).len()).max().unwrap_or(0);
     let mut w = Writer::default();
-    w.int(int(scene.triangles.len(), "scene triangles")?);
+    w.int(int(flat.tree.len(), "the octree's tree INTs")?);
+    w.int(int(voxels, "voxels")?);
+    w.int(int(flat.pool().len(), "the voxels' REAL32s")?);
+    w.int(int(largest, "the largest voxel's REAL32s")?);
     w.int(int(mesh.patches.len(), "patches")?);
     w.int(int(mesh.vertices.len(), "sample points")?);
     w.int(int(mesh.elements.len(), "elements")?);
@@ -221,11 +252,41 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     w.int(int(max_shots.min(i32::MAX as u64) as usize, "shots")?);
     w.real64(until_unshot);
     w.real64(config.overshoot);
-    for t in &scene.triangles {
-        let v = t.tri.v;
-        w.vec3(v[0]);
-        w.vec3(v[1] - v[0]);
-        w.vec3(v[2] - v[0]);
+    w.real64(until_error);
+    w.int(int(scene.objects.len(), "objects")?);
+    // What the error estimate needs (occ_radiosity::estimate): the surfaces' area and mean
+    // reflectance, and per object its area, emitted radiosity and reflectance.
+    let tally = solver.tally();
+    w.real64(tally.total_area);
+    for c in 0..3 {
+        w.real64(tally.rho_avg[c]);
+    }
+    let mut object_area = vec![0.0f64; scene.objects.len()];
+    for e in &mesh.elements {
+        object_area[e.object as usize] += mesh.tri(e).area() as f64;
+    }
+    for (o, area) in scene.objects.iter().zip(object_area) {
+        w.real64(area);
+        let emitted = (o.emission * std::f32::consts::PI).as_dvec3();
+        for c in 0..3 {
+            w.real64(emitted[c]);
+        }
+        for c in 0..3 {
+            w.real64(o.reflectance[c] as f64);
+        }
+    }
+    for &x in &flat.frame {
+        w.real32(x);
+    }
+    for &x in &flat.tree {
+        w.int(x);
+    }
+    for v in 0..voxels {
+        let block = flat.voxel(v);
+        w.int(block.len() as i32);
+        for &x in block {
+            w.real32(x);
+        }
     }
     for ((p, &o), u) in mesh
         .patches
@@ -241,6 +302,7 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
         for c in 0..3 {
             w.real64(u[c]);
         }
+        w.int(o as i32);
     }
     for v in &mesh.vertices {
         w.vec3(v.pos);
@@ -279,13 +341,14 @@ enum Message {
     },
     /// The irradiance at sample point `0`.
     Result(usize, Vec3),
-    /// A node's counters: node, points, corners, form factors, rays.
-    Counters([u64; 5]),
+    /// A node's counters: node, points, corners, form factors, rays, voxels held, their bytes.
+    Counters([u64; 7]),
     /// Every patch's unshot power left.
     Patches(Vec<DVec3>),
-    /// The scene is over the program's capacities: its limits on triangles, patches, sample
-    /// points, rays, nodes, elements and elements of one patch.
-    Refused([i32; 7]),
+    /// The scene is over the program's capacities: its limits on the tree's INTs, voxels, the
+    /// voxels' REAL32s, one voxel's REAL32s, patches, sample points, rays, nodes, elements,
+    /// elements of one patch and objects.
+    Refused([i32; 11]),
     /// The end.
     End,
 }
@@ -335,7 +398,7 @@ impl Message {
                 Message::Result(g, Vec3::new(r.real32()?, r.real32()?, r.real32()?))
             }
             tag::COUNTERS => {
-                let mut c = [0u64; 5];
+                let mut c = [0u64; 7];
                 for x in &mut c {
                     *x = r.int()? as u64;
                 }
@@ -346,7 +409,7 @@ impl Message {
                 Message::Patches((0..count / 3).map(|_| rgb64(r)).collect::<Result<_, _>>()?)
             }
             tag::REFUSED => {
-                let mut limits = [0i32; 7];
+                let mut limits = [0i32; 11];
                 for x in &mut limits {
                     *x = r.int()?;
                 }
@@ -358,8 +421,8 @@ impl Message {
 }
 
 /// Books what the root wrote into `solver`; returns the nodes' own counters (node, points,
-/// corners, form factors, rays).
-fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
+/// corners, form factors, rays, voxels held, their bytes).
+fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
     let rho: Vec<DVec3> = solver
         .mesh
         .patch_object
@@ -402,13 +465,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
                     absorbed += *power * (DVec3::ONE - *rho);
                     *unshot += *power * *rho;
                 }
-                let acc = &mut solver.accounts;
-                for c in 0..3 {
-                    acc.absorbed[c] += absorbed[c];
-                    acc.escaped[c] += shot[c] - total[c];
-                }
-                let unshot = solver.unshot.iter().fold(DVec3::ZERO, |s, u| s + *u);
-                acc.unshot = unshot.to_array();
+                solver.book_totals(shot, total, absorbed);
                 solver.stats.shots = shots;
                 solver.stats.form_factors += form_factors;
                 solver.stats.rays += rays;
@@ -442,10 +499,11 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
                     );
                 }
             }
-            Message::Refused([t, p, v, s, n, e, k]) => anyhow::bail!(
-                "the scene is over carm.occ's capacities: at most {t} triangles, {p} patches, \
-                 {v} sample points, {e} elements ({k} in one patch), {s} rays per form factor \
-                 and {n} nodes"
+            Message::Refused([t, x, f, b, p, v, s, n, e, k, o]) => anyhow::bail!(
+                "the scene is over carm.occ's capacities: at most an octree of {t} tree INTs and \
+                 {x} voxels of {f} REAL32s in all ({b} in one), {p} patches, {v} sample points, \
+                 {e} elements ({k} in one patch), {o} objects, {s} rays per form factor and {n} \
+                 nodes"
             ),
         }
     }
@@ -463,7 +521,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 5]>> {
 }
 
 /// The report's per-node and per-link figures.
-fn report(outcome: &NetworkOutcome, nodes: Vec<[u64; 5]>) -> CarmReport {
+fn report(outcome: &NetworkOutcome, nodes: Vec<[u64; 7]>) -> CarmReport {
     let wall = outcome.elapsed.as_secs_f64();
     let nodes = outcome
         .nodes
@@ -475,6 +533,8 @@ fn report(outcome: &NetworkOutcome, nodes: Vec<[u64; 5]>) -> CarmReport {
             corners: c[2],
             form_factors: c[3],
             rays: c[4],
+            voxels: c[5],
+            voxel_bytes: c[6],
             communications: n.stats.communications,
             busy: if wall > 0.0 {
                 n.busy.as_secs_f64() / wall

@@ -68,6 +68,11 @@ pub struct Args {
     /// program that speaks its host protocol (programs/README.md).
     #[arg(long, value_name = "FILE.occ")]
     pub program: Option<PathBuf>,
+    /// Where carm.occ's nodes run: inproc (this process) or mpi (spread over the ranks of
+    /// `mpirun`, rank 0 playing the host and writing the outputs; needs a build with
+    /// --features mpi).
+    #[arg(long, value_enum, default_value = "inproc")]
+    pub transport: super::transport::Kind,
     /// Longest patch (shooter) edge; default: scene diagonal / 4.
     #[arg(long)]
     pub patch_size: Option<f32>,
@@ -127,7 +132,11 @@ pub struct Args {
 /// Runs `occ radiosity`.
 pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     check_args(&args)?;
-    let progress = Progress::new();
+    let mut transport = super::transport::Chosen::new(args.transport)?;
+    // Under MPI every rank loads and meshes the scene (the same way) and runs its share of the
+    // nodes; only rank 0, which holds the host's channels, speaks and writes.
+    let reports = transport.reports();
+    let progress = Progress::new(reports);
     let t0 = Instant::now();
     progress.stage("loading", "");
     let (name, mut scene) = load_scene(args.scene.as_deref())?;
@@ -144,7 +153,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         )?),
         None => None,
     };
-    let truth = if args.pathtrace || args.reference_mc {
+    let truth = if reports && (args.pathtrace || args.reference_mc) {
         let probes = probes.as_deref().unwrap_or_default();
         Some(path_trace(&args, &name, &scene, probes)?)
     } else {
@@ -173,7 +182,9 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         args.max_elements
     );
     let diag = scene.diagonal();
-    print_left_out(&name, &scene, &mesh, diag);
+    if reports {
+        print_left_out(&name, &scene, &mesh, diag);
+    }
     let mesh_time = t1.elapsed().as_secs_f64();
     progress.stage(
         "octree",
@@ -247,7 +258,12 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                 threads,
                 program,
             };
-            let report = carm::solve(&mut solver, &settings, Box::new(progress.on_shot()))?;
+            let on_shot = Box::new(progress.on_shot());
+            let Some(report) = carm::solve(&mut solver, &settings, on_shot, transport.transport())?
+            else {
+                // A rank without the host: its nodes are done, rank 0 writes the outputs.
+                return Ok(ExitCode::SUCCESS);
+            };
             progress.done();
             Some(report)
         }
@@ -341,13 +357,16 @@ fn print_left_out(name: &str, scene: &Scene, mesh: &Mesh, diag: f32) {
 /// Progress on stderr: a line per stage, and during shooting a line that rewrites itself on a
 /// terminal or a new line every few seconds otherwise.
 struct Progress {
+    /// Whether to print at all (not on the MPI ranks other than 0).
+    shown: bool,
     terminal: bool,
     start: Instant,
 }
 
 impl Progress {
-    fn new() -> Progress {
+    fn new(shown: bool) -> Progress {
         Progress {
+            shown,
             terminal: std::io::stderr().is_terminal(),
             start: Instant::now(),
         }
@@ -381,12 +400,15 @@ impl Progress {
 
     /// Ends the progress line.
     fn done(&self) {
-        if self.terminal {
+        if self.shown && self.terminal {
             eprintln!();
         }
     }
 
     fn stage(&self, stage: &str, detail: &str) {
+        if !self.shown {
+            return;
+        }
         eprintln!(
             "[{:>7.1} s] {stage}{}{detail}",
             self.start.elapsed().as_secs_f64(),
@@ -475,10 +497,14 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
             "--solver carm does not subdivide yet: give --no-adapt"
         );
         anyhow::ensure!(
-            matches!(args.until, Until::Unshot(_) | Until::Shots(_)),
-            "--solver carm takes --until unshot=F or shots=N"
+            !matches!(args.until, Until::Seconds(_)),
+            "--solver carm takes --until error=F, unshot=F or shots=N"
         );
     }
+    anyhow::ensure!(
+        args.transport == super::transport::Kind::Inproc || matches!(args.solver, SolverKind::Carm),
+        "--transport mpi spreads carm.occ's nodes: give --solver carm"
+    );
     anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
     anyhow::ensure!(
         args.program.is_none() || matches!(args.solver, SolverKind::Carm),

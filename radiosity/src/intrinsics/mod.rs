@@ -163,6 +163,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         result: None,
         addr: walk::voxel_of_point as *const u8,
     },
+    Intrinsic {
+        name: "RAD.ERROR.REACHED",
+        params: &[ValReal64s, ValReal64s, ValReal64, ResultInt],
+        result: None,
+        addr: estimate::error_reached as *const u8,
+    },
 ];
 
 /// Floats per ray written by `RAD.SHADOW.RAYS`: origin (3), direction (3), tmin, tmax (the
@@ -609,6 +615,7 @@ pub unsafe extern "C" fn shadow_rays_batch(
     unsafe { *count = written };
 }
 
+pub mod estimate;
 #[cfg(test)]
 mod test;
 pub mod weighted;

@@ -359,7 +359,7 @@ impl<'a> FlatView<'a> {
         let o = Vec3::new(ray[0], ray[1], ray[2]);
         let d = Vec3::new(ray[3], ray[4], ray[5]);
         let (tmin, tmax) = (ray[6], ray[7]);
-        // An empty or NaN interval is clear.
+        // An empty ray, or one with a NaN bound, is answered at once.
         if tmin.partial_cmp(&tmax) != Some(std::cmp::Ordering::Less) {
             return Step::Clear;
         }
