@@ -21,12 +21,26 @@ use crate::geom::{Tri, clip_polygon};
 use crate::octree::{Octree, Traversal};
 use crate::rng::Pcg32;
 
+/// Receivers nearer a source than this many times the square root of its area are in its near
+/// field: there the form factor varies most across the source and with the receiver's position
+/// (the dim block faces see most of their light from the strip of floor at their base), so they
+/// always cast [`FormFactorConfig::rays`] rays ([`FormFactorConfig::far_rays`]).
+pub const NEAR_FIELD: f32 = 1.0;
+
 /// Settings of the form-factor kernel.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct FormFactorConfig {
     /// Shadow rays (source samples) per receiver and source; rounded to a square for
     /// stratification. More rays: softer, less noisy shadows, proportionally more time.
     pub rays: u32,
+    /// Rays for receivers outside the source's near field ([`NEAR_FIELD`]) that see all of it
+    /// above their horizon (where a receiver sees only part of it, a sample below the horizon
+    /// tells nothing, and with one or two samples the analytic form's visible share would
+    /// often rest on none: a bias low); 0: `rays`. The
+    /// solver casts fewer for weak shots ([`crate::solver::SolverConfig::full_rays_power`]).
+    /// Each receiver's samples are drawn from its own slot of `2k²` numbers of the batch's
+    /// generator, `k` from `rays` ([`sample_grid`]), whatever it casts.
+    pub far_rays: u32,
     /// The analytic form is used when the disc estimator's bias bound `(A/m) / (π d_min²)`
     /// exceeds this (0: always analytic; infinity: always Wallace).
     pub max_disc_bias: f32,
@@ -42,6 +56,7 @@ impl Default for FormFactorConfig {
     fn default() -> Self {
         FormFactorConfig {
             rays: 16,
+            far_rays: 0,
             max_disc_bias: 0.002,
             offset: 1e-3,
         }
@@ -87,6 +102,12 @@ pub fn source_samples(src: &Tri, m: u32, rng: &mut Pcg32, out: &mut Vec<Vec3>) {
     source_samples_weighted(src, m, None, rng, out, &mut Vec::new());
 }
 
+/// The side `k` of the `k × k` grid of source samples taken for `m` rays: `⌈√m⌉` (at least 1).
+/// A set of samples draws `2k²` numbers from its generator.
+pub fn sample_grid(m: u32) -> u32 {
+    (m.max(1) as f32).sqrt().ceil() as u32
+}
+
 /// [`source_samples`], and in `weights` the source's relative unshot radiosity at each sample
 /// (`density`; all 1 when `None`, and then `weights` is left empty).
 pub fn source_samples_weighted(
@@ -99,7 +120,7 @@ pub fn source_samples_weighted(
 ) {
     out.clear();
     weights.clear();
-    let k = (m.max(1) as f32).sqrt().ceil() as u32;
+    let k = sample_grid(m);
     for i in 0..k {
         for j in 0..k {
             let u = (i as f32 + rng.next_f32()) / k as f32;
@@ -154,19 +175,28 @@ impl SourceDensity {
 
     /// The density of a patch `src` made of `parts`, each a triangle of it with its unshot
     /// radiosity (unshot power over area, channels summed): at each grid cell, the part that
-    /// contains the cell's centre (the nearest, for centres on shared edges). `None` with fewer
-    /// than two parts, or as [`SourceDensity::new`]. The solver and the `RAD.SOURCE.DENSITY`
-    /// intrinsic both tabulate a shooting patch with this.
+    /// contains the cell's centre (the nearest, for centres beside every part). `None` with
+    /// fewer than two parts, or as [`SourceDensity::new`]. The solver and the
+    /// `RAD.SOURCE.DENSITY` intrinsic both tabulate a shooting patch with this.
     pub fn of_parts(src: &Tri, g: u32, parts: &[(Tri, f32)]) -> Option<SourceDensity> {
         if parts.len() < 2 {
             return None;
         }
+        // Neighbouring cells mostly lie in one part: the part holding the last cell's centre
+        // is tried first, and the nearest part searched for only when it fails.
+        let last = std::cell::Cell::new(0);
         SourceDensity::new(src, g, |x| {
-            parts
-                .iter()
-                .map(|(t, d)| ((t.closest_point(x) - x).length_squared(), *d))
-                .fold((f32::MAX, 0.0), |b, c| if c.0 < b.0 { c } else { b })
-                .1
+            let inside = |t: &Tri| t.barycentric(x).iter().all(|&b| b >= 0.0);
+            if !inside(&parts[last.get()].0) {
+                let nearest = parts
+                    .iter()
+                    .map(|(t, _)| (t.closest_point(x) - x).length_squared())
+                    .enumerate()
+                    .fold((0, f32::MAX), |b, c| if c.1 < b.1 { c } else { b })
+                    .0;
+                last.set(nearest);
+            }
+            parts[last.get()].1
         })
     }
 
@@ -192,6 +222,66 @@ impl SourceDensity {
         let cell = |x: f32| ((x * self.g as f32) as u32).min(self.g - 1);
         self.cells[(cell(u) * self.g + cell(v)) as usize]
     }
+}
+
+/// Whether the receiver `(p, n)` can see any of the (one-sided) source `src`: it is in front of
+/// the source's plane by more than the rounding of their coordinates and some of the source is
+/// above its horizon. When not, every form factor to `src` from `(p, n)` is zero and no shadow
+/// ray is cast.
+///
+/// A receiver in the source's plane sees it edge-on (form factor 0), but the contour formula
+/// ([`point_polygon`]) gives 1/2 for a point on the polygon's boundary: a sample point on the
+/// fold of a slightly non-planar wall lies within rounding of the neighbouring triangle's plane
+/// and on its edge, and would see it at 1/2. (Points on a surface's boundary are evaluated a
+/// thousandth of their shortest edge inside it ([`crate::mesh::Vertex::eval`]), far more than
+/// rounding: a floor point at a wall's foot still sees the wall.)
+pub fn faces(p: Vec3, n: Vec3, src: &Tri) -> bool {
+    let rounding = 8.0 * f32::EPSILON * (p.abs().max_element() + src.v[0].abs().max_element());
+    src.normal().dot(p - src.v[0]) > rounding && src.v.iter().any(|v| n.dot(*v - p) > 0.0)
+}
+
+/// Shadow rays the receiver `(p, n)` casts to the source `src`: none when it does not face it
+/// ([`faces`]); [`FormFactorConfig::far_rays`] when that is fewer than `rays` (and not 0) and
+/// the receiver is outside the source's near field ([`NEAR_FIELD`]) and sees all of it above
+/// its horizon; else [`FormFactorConfig::rays`]. The solver's kernels and
+/// `RAD.RECEIVER.SAMPLES` ask this.
+pub fn receiver_rays(p: Vec3, n: Vec3, src: &Tri, config: &FormFactorConfig) -> u32 {
+    if !faces(p, n, src) {
+        return 0;
+    }
+    let near2 = NEAR_FIELD * NEAR_FIELD * src.area();
+    let far = (1..config.rays).contains(&config.far_rays)
+        && src.v.iter().all(|v| n.dot(*v - p) > 0.0)
+        && (src.closest_point(p) - p).length_squared() >= near2;
+    if far { config.far_rays } else { config.rays }
+}
+
+/// Draws the weighted samples of `src` ([`source_samples_weighted`]) that the receiver `(p, n)`
+/// casts its rays to, [`receiver_rays`] of them (rounded up to a square); none when it does not
+/// face the source. Every receiver owns a slot of `2k²` numbers of `rng`, `k` =
+/// [`sample_grid`]`(config.rays)`, draws from its start and leaves `rng` at the next slot, so
+/// the receivers of a batch draw from one generator in order and a node holding one of them
+/// draws the same set by skipping to its slot (`RAD.RECEIVER.SAMPLES`). Returns the rays.
+pub fn receiver_samples(
+    (p, n): (Vec3, Vec3),
+    src: &Tri,
+    config: &FormFactorConfig,
+    density: Option<&SourceDensity>,
+    rng: &mut Pcg32,
+    out: &mut Vec<Vec3>,
+    weights: &mut Vec<f32>,
+) -> u32 {
+    let slot = 2 * u64::from(sample_grid(config.rays)).pow(2);
+    let rays = receiver_rays(p, n, src, config);
+    if rays == 0 {
+        out.clear();
+        weights.clear();
+        rng.advance(slot);
+        return 0;
+    }
+    source_samples_weighted(src, rays, density, rng, out, weights);
+    rng.advance(slot - 2 * out.len() as u64);
+    rays
 }
 
 /// Computes the form factor from the receiver `(p, n)` to source triangle `src` using the
@@ -242,12 +332,11 @@ pub fn form_factor_weighted(
     config: &FormFactorConfig,
     mut occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
 ) -> FormFactor {
-    let ns = src.normal();
-    let area = src.area();
-    // Receiver behind the (one-sided) source, or source wholly below the receiver's horizon.
-    if ns.dot(p - src.v[0]) <= 0.0 || src.v.iter().all(|v| n.dot(*v - p) <= 0.0) {
+    if !faces(p, n, src) {
         return FormFactor::default();
     }
+    let ns = src.normal();
+    let area = src.area();
     let d_min2 = (src.closest_point(p) - p).length_squared();
     let sub_area = area / samples.len() as f32;
     let analytic = sub_area > config.max_disc_bias * std::f32::consts::PI * d_min2;

@@ -9,9 +9,7 @@
 
 use glam::Vec3;
 
-use crate::formfactor::{
-    FormFactorConfig, SourceDensity, form_factor_weighted, source_samples_weighted,
-};
+use crate::formfactor::{FormFactorConfig, SourceDensity, form_factor_weighted, receiver_samples};
 use crate::geom::Tri;
 use crate::mesh::Vertex;
 use crate::octree::{Octree, Traversal};
@@ -108,17 +106,24 @@ pub fn shoot_batch_visibility(
     let mut weights = Vec::with_capacity(config.rays as usize + 8);
     let mut stats = BatchStats::default();
     for (p, o) in points.iter().zip(out.iter_mut()) {
-        source_samples_weighted(
+        stats.form_factors += 1;
+        let (eval, normal) = (Vec3::from(p.eval), Vec3::from(p.normal));
+        let rays = receiver_samples(
+            (eval, normal),
             source,
-            config.rays,
+            config,
             density,
             &mut rng,
             &mut samples,
             &mut weights,
         );
+        if rays == 0 {
+            *o = 0.0;
+            continue;
+        }
         let f = form_factor_weighted(
-            Vec3::from(p.eval),
-            Vec3::from(p.normal),
+            eval,
+            normal,
             source,
             &samples,
             &weights,
@@ -128,7 +133,6 @@ pub fn shoot_batch_visibility(
             },
         );
         *o = f.value;
-        stats.form_factors += 1;
         stats.rays += if octree.is_some() { f.rays as u64 } else { 0 };
         stats.analytic += f.analytic as u64;
     }

@@ -33,6 +33,28 @@ use crate::scene::Scene;
 /// about five elements across), so each element's share is seen.
 pub const DENSITY_GRID: u32 = 24;
 
+/// The default [`SolverConfig::full_rays_power`]. The noise a shot leaves at a sample point
+/// is in proportion to its power over the square root of its rays, so the rays that buy the
+/// least noise overall are in proportion to each shot's power. The first shots (the lights and
+/// the brightest patches) carry several percent each and keep all their rays; the hundreds of
+/// shots that finish a solve carry hundredths of a percent each and cast one ray to each far
+/// receiver. On the Cornell box at the defaults this takes about half the time, with the large
+/// surfaces' answers as close to the path-traced reference (`radiosity/REFERENCES.md`).
+pub const FULL_RAYS_POWER: f64 = 0.01;
+
+/// Shadow rays per far form factor ([`FormFactorConfig::far_rays`]) for a shot of `shot` power
+/// (channels summed) in a scene emitting `emitted`: `rays` when the shot carries at least
+/// `full_rays_power` of the emitted power, fewer in proportion below, at least one. The solver
+/// and `RAD.SHOT.RAYS` both ask this.
+pub fn far_rays(rays: u32, shot: f64, emitted: f64, full_rays_power: f64) -> u32 {
+    let rays = rays.max(1);
+    let full = full_rays_power * emitted;
+    if shot >= full {
+        return rays;
+    }
+    ((f64::from(rays) * shot / full).round() as u32).clamp(1, rays)
+}
+
 /// When to stop shooting.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub enum Until {
@@ -118,6 +140,11 @@ pub struct SolverConfig {
     pub overshoot: f64,
     /// Overshooting by the ambient estimate ([`crate::overshoot`]).
     pub acceleration: Acceleration,
+    /// Shots carrying at least this fraction of the emitted power cast `form_factor.rays`
+    /// shadow rays per form factor; weaker ones cast fewer to receivers outside the source's
+    /// near field, in proportion to their power, and at least one ([`Solver::shot_rays`],
+    /// [`FormFactorConfig::far_rays`]). 0: every shot casts them all.
+    pub full_rays_power: f64,
     /// Stopping rule.
     pub until: Until,
     /// Hard limit on shots whatever the rule.
@@ -137,6 +164,7 @@ impl Default for SolverConfig {
             adapt: None,
             overshoot: 1.0,
             acceleration: Acceleration::Auto,
+            full_rays_power: FULL_RAYS_POWER,
             until: Until::Unshot(0.01),
             max_shots: 1_000_000,
             seed: 1,
@@ -362,8 +390,12 @@ impl<'a> Solver<'a> {
             }
         }
         let delta_b = (shot / self.patch_area[src]).as_vec3();
-        let factors = self.shoot_all(src, density.as_ref());
-        let mut factors = self.refine(src, factors, shot, density.as_ref());
+        let form_factor = FormFactorConfig {
+            far_rays: self.shot_rays(shot),
+            ..self.config.form_factor
+        };
+        let factors = self.shoot_all(src, density.as_ref(), &form_factor);
+        let mut factors = self.refine(src, factors, shot, density.as_ref(), &form_factor);
         if self.stages.close_rows {
             self.close_row(src, &mut factors);
         }
@@ -436,6 +468,18 @@ impl<'a> Solver<'a> {
         SourceDensity::of_parts(&self.mesh.patches[src], DENSITY_GRID, &parts)
     }
 
+    /// Shadow rays per far form factor ([`FormFactorConfig::far_rays`]) for a shot of `shot`
+    /// power ([`far_rays`]).
+    pub fn shot_rays(&self, shot: DVec3) -> u32 {
+        let emitted: f64 = self.accounts.emitted.iter().sum();
+        far_rays(
+            self.config.form_factor.rays,
+            shot.abs().element_sum(),
+            emitted,
+            self.config.full_rays_power,
+        )
+    }
+
     /// The patch with the most power to shoot: its unshot power, plus its overshoot when
     /// overshooting by `ambient` (so that a patch whose unshot power is its own overshoot,
     /// negated, waits for the light that pays it back).
@@ -460,9 +504,14 @@ impl<'a> Solver<'a> {
     }
 
     /// Form factors (weighted by `density`) from every sample point to patch `src`.
-    fn shoot_all(&mut self, src: usize, density: Option<&SourceDensity>) -> Vec<f32> {
+    fn shoot_all(
+        &mut self,
+        src: usize,
+        density: Option<&SourceDensity>,
+        config: &FormFactorConfig,
+    ) -> Vec<f32> {
         let points: Vec<SamplePoint> = self.mesh.vertices.iter().map(SamplePoint::from).collect();
-        self.shoot_points(src, density, &points)
+        self.shoot_points(src, density, &points, config)
     }
 
     fn shoot_points(
@@ -470,10 +519,10 @@ impl<'a> Solver<'a> {
         src: usize,
         density: Option<&SourceDensity>,
         points: &[SamplePoint],
+        config: &FormFactorConfig,
     ) -> Vec<f32> {
         let source = self.mesh.patches[src];
         let seed = self.config.seed ^ (self.stats.shots << 20) ^ src as u64;
-        let config = self.config.form_factor;
         let octree = self.stages.shadow_rays.then_some(&self.octree);
         let chunks: Vec<(Vec<f32>, crate::kernels::BatchStats)> = points
             .par_chunks(256)
@@ -485,7 +534,7 @@ impl<'a> Solver<'a> {
                     &source,
                     density,
                     chunk,
-                    &config,
+                    config,
                     seed.wrapping_add(i as u64 * 7919),
                     &mut out,
                 );
@@ -510,6 +559,7 @@ impl<'a> Solver<'a> {
         mut factors: Vec<f32>,
         shot: DVec3,
         density: Option<&SourceDensity>,
+        config: &FormFactorConfig,
     ) -> Vec<f32> {
         let Some(adapt) = self.config.adapt else {
             return factors;
@@ -531,7 +581,7 @@ impl<'a> Solver<'a> {
                 .iter()
                 .map(|&(a, b)| self.midpoint(a, b))
                 .collect();
-            let mid_f = self.shoot_points(src, density, &mids);
+            let mid_f = self.shoot_points(src, density, &mids, config);
             let mut split = 0;
             for (&(a, b), (m, fm)) in candidates.iter().zip(mids.iter().zip(mid_f)) {
                 let (fa, fb) = (factors[a as usize], factors[b as usize]);
@@ -737,17 +787,24 @@ impl<'a> Solver<'a> {
     }
 
     /// Returns per-object `(area, mean B)` (area-weighted over elements; no ambient term).
+    /// (B is linear in the irradiance H, so each object's mean is `E + ρ` times its mean H.)
     pub fn object_means(&self) -> Vec<(f64, DVec3)> {
         let mut out = vec![(0.0, DVec3::ZERO); self.scene.objects.len()];
-        for (i, e) in self.mesh.elements.iter().enumerate() {
-            let b = self.element_corner_radiosity(i, Vec3::ZERO);
-            let mean = (b[0] + b[1] + b[2]).as_dvec3() / 3.0;
-            let a = self.element_area[i];
-            out[e.object as usize].0 += a;
-            out[e.object as usize].1 += mean * a;
+        let h = &self.irradiance;
+        for (e, &a) in self.mesh.elements.iter().zip(&self.element_area) {
+            let [i, j, k] = e.v.map(|v| v as usize);
+            let mean = (h[i] + h[j] + h[k]).as_dvec3() / 3.0;
+            let o = &mut out[e.object as usize];
+            o.0 += a;
+            o.1 += mean * a;
         }
         out.into_iter()
-            .map(|(a, s)| (a, if a > 0.0 { s / a } else { DVec3::ZERO }))
+            .zip(&self.scene.objects)
+            .map(|((a, s), obj)| {
+                let b = obj.emission.as_dvec3() * std::f64::consts::PI
+                    + obj.reflectance.as_dvec3() * s / a;
+                (a, if a > 0.0 { b } else { DVec3::ZERO })
+            })
             .collect()
     }
 

@@ -125,6 +125,52 @@ fn worst_difference(solver: &Solver, truth: &Solver) -> (f64, String) {
 }
 
 #[test]
+fn fewer_far_rays_leave_near_and_part_horizon_receivers_as_they_were() {
+    // A weak shot casts fewer rays to far receivers that see the whole source above their
+    // horizon (`FormFactorConfig::far_rays`); every receiver keeps its own slot of samples, so
+    // near receivers and receivers that see only part of the source get exactly the answers of
+    // a shot casting all its rays, and the far ones the same answers on average.
+    let src = Tri::new(Vec3::ZERO, Vec3::Z, Vec3::X);
+    let octree = Octree::build(&[src], OctreeConfig::default());
+    let point = |p: Vec3, n: Vec3| SamplePoint {
+        pos: p.to_array(),
+        normal: n.to_array(),
+        eval: p.to_array(),
+    };
+    let near = point(Vec3::new(0.3, 0.1, 0.3), -Vec3::Y);
+    let part = point(
+        Vec3::new(0.3, 1.0, 0.3),
+        Vec3::new(0.0, -1.0, 2.0).normalize(),
+    );
+    let far = point(Vec3::new(0.3, 3.0, 0.3), -Vec3::Y);
+    let points = [near, far, part];
+    let full = FormFactorConfig {
+        rays: 16,
+        ..FormFactorConfig::default()
+    };
+    let few = FormFactorConfig {
+        far_rays: 1,
+        ..full
+    };
+    let (mut sum_full, mut sum_few) = (0.0f64, 0.0f64);
+    let runs = 400;
+    for seed in 0..runs {
+        let (mut a, mut b) = ([0.0f32; 3], [0.0f32; 3]);
+        let sa = shoot_batch(&octree, &src, &points, &full, seed, &mut a);
+        let sb = shoot_batch(&octree, &src, &points, &few, seed, &mut b);
+        assert_eq!((a[0], a[2]), (b[0], b[2]), "seed {seed}");
+        assert!(sb.rays < sa.rays);
+        sum_full += f64::from(a[1]);
+        sum_few += f64::from(b[1]);
+    }
+    let exact = f64::from(point_polygon(Vec3::from(far.pos), -Vec3::Y, &src.v));
+    for sum in [sum_full, sum_few] {
+        let mean = sum / runs as f64;
+        assert!((mean / exact - 1.0).abs() < 0.01, "{mean} against {exact}");
+    }
+}
+
+#[test]
 fn the_error_rule_reaches_its_target_in_a_room_lit_through_a_door() {
     // Issue 10, cause 5. The same solver and mesh run far (unshot 1e-5) is the answer here, so
     // that only the stopping rule differs. A fixed unshot fraction of 1% stops with room B

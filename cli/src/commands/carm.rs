@@ -261,6 +261,7 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     for c in 0..3 {
         w.real64(tally.rho_avg[c]);
     }
+    w.real64(config.full_rays_power);
     let mut object_area = vec![0.0f64; scene.objects.len()];
     for e in &mesh.elements {
         object_area[e.object as usize] += mesh.tri(e).area() as f64;

@@ -69,9 +69,15 @@ pub struct Args {
     /// Probe points, one `x y z nx ny nz` per line; writes probe.csv.
     #[arg(long)]
     pub probe: Option<PathBuf>,
-    /// Shadow rays per form factor (time against accuracy of shadows).
+    /// Shadow rays per form factor (time against accuracy of shadows); shots carrying under
+    /// --full-rays-power of the emitted power cast fewer to receivers far from them.
     #[arg(long, default_value_t = 8)]
     pub rays: u32,
+    /// Shots carrying at least this fraction of the emitted power cast --rays rays to every
+    /// receiver; weaker ones cast fewer, in proportion to their power, to receivers outside
+    /// their near field (0: every shot casts them all).
+    #[arg(long, default_value_t = occ_radiosity::solver::FULL_RAYS_POWER)]
+    pub full_rays_power: f64,
     /// Solver.
     #[arg(long, value_enum, default_value = "reference")]
     pub solver: SolverKind,
@@ -574,6 +580,10 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
         "--rays must be between 1 and 65536"
     );
     anyhow::ensure!(
+        (0.0..=1.0).contains(&args.full_rays_power),
+        "--full-rays-power must lie in [0, 1]"
+    );
+    anyhow::ensure!(
         args.overshoot > 0.0 && args.overshoot < 2.0,
         "--overshoot must lie in (0, 2)"
     );
@@ -649,6 +659,7 @@ fn solver_config(args: &Args, diag: f32, element_size: f32) -> SolverConfig {
         adapt,
         overshoot: args.overshoot,
         acceleration: args.acceleration,
+        full_rays_power: args.full_rays_power,
         until: if args.converge {
             Until::Error(CONVERGED)
         } else {

@@ -20,7 +20,9 @@ use glam::Vec3;
 use occ_runtime::abi::Word;
 use occ_runtime::intrinsic::{Intrinsic, ParamKind::*};
 
-use crate::formfactor::{FormFactorConfig, form_factor_with, point_polygon, source_samples};
+use crate::formfactor::{
+    FormFactorConfig, form_factor_with, point_polygon, sample_grid, source_samples,
+};
 use crate::geom::Tri;
 use crate::octree::VOXEL_TRI_FLOATS;
 use crate::packet::{LANES, RayQuery, TriPacket};
@@ -110,6 +112,21 @@ pub static INTRINSICS: &[Intrinsic] = &[
         ],
         result: None,
         addr: weighted::source_samples_weighted_at as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.SHOT.RAYS",
+        params: &[ValInt, ValReal64, ValReal64, ValReal64, ResultInt],
+        result: None,
+        addr: weighted::shot_rays as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.RECEIVER.SAMPLES",
+        params: &[
+            ValReal32s, ValReal32s, ValReal32s, ValInt, ValInt, ValInt, ValInt, ValReal32s,
+            VarReal32s, VarReal32s, ResultInt,
+        ],
+        result: None,
+        addr: weighted::receiver_samples_at as *const u8,
     },
     Intrinsic {
         name: "RAD.FORM.FACTOR.WEIGHTED",
@@ -273,7 +290,7 @@ pub unsafe extern "C" fn source_samples_at(
     if let Some(tri) = tri.filter(|_| valid) {
         let mut rng = Pcg32::new(seed as u64, SAMPLE_STREAM);
         // Each set draws two numbers per sample of a k x k grid (`source_samples`).
-        let k = (m as f32).sqrt().ceil() as u64;
+        let k = u64::from(sample_grid(m as u32));
         rng.advance(set as u64 * 2 * k * k);
         source_samples(&tri, m as u32, &mut rng, &mut samples);
     }

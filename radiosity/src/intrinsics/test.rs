@@ -509,3 +509,127 @@ fn voxel_occluded_rejects_bad_lengths_and_writes_nothing() {
     assert_eq!(voxel_occluded_call(&tri, &ray, &mut blocked), 1);
     assert_eq!(blocked, [1]);
 }
+
+type ReceiverSamples = unsafe extern "C" fn(
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    *const f32,
+    Word,
+    Word,
+    Word,
+    Word,
+    Word,
+    *const f32,
+    Word,
+    *mut f32,
+    Word,
+    *mut f32,
+    Word,
+    *mut Word,
+);
+
+/// Calls RAD.RECEIVER.SAMPLES through the table (uniform source).
+fn receiver_samples_call(p: [f32; 6], rays: Word, far: Word, set: Word, out: &mut [f32]) -> Word {
+    let e = entry("RAD.RECEIVER.SAMPLES");
+    // SAFETY: the table says this is the signature.
+    let f: ReceiverSamples = unsafe { std::mem::transmute(e.addr) };
+    let (mut count, mut weights) = (0, [0.0f32; 16]);
+    // SAFETY: valid slices and result.
+    unsafe {
+        f(
+            p.as_ptr(),
+            3,
+            p[3..].as_ptr(),
+            3,
+            SOURCE.as_ptr(),
+            9,
+            rays,
+            far,
+            77,
+            set,
+            std::ptr::null(),
+            0,
+            out.as_mut_ptr(),
+            out.len() as Word,
+            weights.as_mut_ptr(),
+            weights.len() as Word,
+            &mut count,
+        )
+    };
+    count
+}
+
+#[test]
+fn receiver_samples_at_a_set_are_the_solvers_with_far_rays() {
+    // A batch as the solver's kernel draws it with 9 rays, 1 to far receivers: a near receiver,
+    // a far one, one behind the source (none), one that sees only part of it above its horizon.
+    let receivers = [
+        [0.3, 0.9, 0.3, 0.0, 1.0, 0.0],
+        [0.3, -3.0, 0.3, 0.0, 1.0, 0.0],
+        [0.3, 2.0, 0.3, 0.0, 1.0, 0.0],
+        [0.3, 0.0, 0.3, 0.0, 0.3, -0.954],
+    ];
+    let config = FormFactorConfig {
+        rays: 9,
+        far_rays: 1,
+        ..FormFactorConfig::default()
+    };
+    let tri = triangle(&SOURCE).expect("tri");
+    let mut rng = Pcg32::new(77, SAMPLE_STREAM);
+    let (mut want, mut w) = (Vec::new(), Vec::new());
+    let mut drawn = Vec::new();
+    for (set, r) in receivers.iter().enumerate() {
+        let (p, n) = (Vec3::from_slice(&r[..3]), Vec3::from_slice(&r[3..]));
+        let rays = crate::formfactor::receiver_samples(
+            (p, n),
+            &tri,
+            &config,
+            None,
+            &mut rng,
+            &mut want,
+            &mut w,
+        );
+        let mut out = [9.0f32; 3 * 9];
+        let count = receiver_samples_call(*r, 9, 1, set as Word, &mut out);
+        assert_eq!(count as usize, want.len(), "set {set}");
+        assert_eq!(points(&out[..3 * want.len()]), Some(want.clone()));
+        drawn.push(rays);
+    }
+    assert_eq!(drawn, [9, 1, 0, 9]);
+    // The far receiver draws the start of its full set.
+    let (mut full, mut out) = ([0.0f32; 27], [0.0f32; 27]);
+    receiver_samples_call(receivers[1], 9, 0, 1, &mut full);
+    receiver_samples_call(receivers[1], 9, 1, 1, &mut out);
+    assert_ne!(full[..3], out[..3], "one sample is not the first of nine");
+    let mut out = [9.0f32; 27];
+    assert_eq!(receiver_samples_call(receivers[0], 9, 10, 0, &mut out), -1);
+    assert_eq!(receiver_samples_call(receivers[0], 0, 0, 0, &mut out), -1);
+    assert_eq!(
+        receiver_samples_call(receivers[0], 9, 0, 0, &mut out[..26]),
+        -1
+    );
+    assert!(out.iter().all(|x| *x == 9.0));
+}
+
+#[test]
+fn shot_rays_are_the_solvers() {
+    type ShotRays = unsafe extern "C" fn(Word, f64, f64, f64, *mut Word);
+    let e = entry("RAD.SHOT.RAYS");
+    // SAFETY: the table says this is the signature.
+    let f: ShotRays = unsafe { std::mem::transmute(e.addr) };
+    let call = |rays, shot, emitted, full| {
+        let mut far = 0;
+        // SAFETY: a valid result address.
+        unsafe { f(rays, shot, emitted, full, &mut far) };
+        far
+    };
+    assert_eq!(call(8, 5.0, 100.0, 0.01), 8);
+    assert_eq!(call(8, 0.5, 100.0, 0.01), 4);
+    assert_eq!(call(8, 1e-6, 100.0, 0.01), 1);
+    assert_eq!(call(8, 1e-6, 100.0, 0.0), 8);
+    assert_eq!(call(0, 1.0, 100.0, 0.01), -1);
+    assert_eq!(call(8, -1.0, 100.0, 0.01), -1);
+    assert_eq!(call(8, f64::NAN, 100.0, 0.01), -1);
+}

@@ -10,11 +10,12 @@ use occ_runtime::abi::Word;
 
 use super::{MAX_SAMPLES, MAX_SKIPPED_SETS, SAMPLE_STREAM, array, point, points, triangle};
 use crate::formfactor::{
-    FormFactorConfig, SourceDensity, form_factor_weighted, source_samples_weighted,
+    FormFactorConfig, SourceDensity, form_factor_weighted, receiver_samples, sample_grid,
+    source_samples_weighted,
 };
 use crate::geom::Tri;
 use crate::rng::Pcg32;
-use crate::solver::DENSITY_GRID;
+use crate::solver::{DENSITY_GRID, far_rays};
 
 /// Cells `RAD.SOURCE.DENSITY` writes for a non-uniform source.
 pub const DENSITY_CELLS: Word = (DENSITY_GRID * DENSITY_GRID) as Word;
@@ -115,7 +116,7 @@ pub unsafe extern "C" fn source_samples_weighted_at(
     if let Some(tri) = tri.filter(|_| valid) {
         let mut rng = Pcg32::new(seed as u64, SAMPLE_STREAM);
         // Each set draws two numbers per sample of a k x k grid, weighted or not.
-        let k = (m as f32).sqrt().ceil() as u64;
+        let k = u64::from(sample_grid(m as u32));
         rng.advance(set as u64 * 2 * k * k);
         source_samples_weighted(
             &tri,
@@ -214,4 +215,131 @@ fn weighted_form_factor(
         visible[k] == 0
     })
     .value
+}
+
+/// `PROC RAD.SHOT.RAYS (VAL INT rays, VAL REAL64 shot, emitted, full.power, RESULT INT far)`:
+/// the rays per far form factor of a shot of `shot` power (channels summed) in a scene emitting
+/// `emitted` (channels summed) when shots of at least `full.power` of it cast all `rays`
+/// ([`far_rays`]; the solver's `full_rays_power`, 0: always `rays`): the `far.rays` argument of
+/// `RAD.RECEIVER.SAMPLES`. `far` is -1 when `rays` is not in 1..=65536 or a power is negative
+/// or not finite.
+///
+/// # Safety
+/// `far` is valid for one word (the occam ABI).
+pub unsafe extern "C" fn shot_rays(
+    rays: Word,
+    shot: f64,
+    emitted: f64,
+    full_power: f64,
+    far: *mut Word,
+) {
+    let valid = (1..=MAX_SAMPLES).contains(&rays)
+        && [shot, emitted, full_power]
+            .iter()
+            .all(|x| x.is_finite() && *x >= 0.0);
+    let value = if valid {
+        far_rays(rays as u32, shot, emitted, full_power) as Word
+    } else {
+        -1
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *far = value };
+}
+
+/// `PROC RAD.RECEIVER.SAMPLES (VAL []REAL32 point, normal, tri, VAL INT rays, far.rays,
+/// VAL INT64 seed, VAL INT set, VAL []REAL32 grid, []REAL32 out, []REAL32 weights,
+/// RESULT INT count)`: the samples of the source `tri` that the receiver `(point, normal)`, the
+/// `set`-th of its batch, casts its rays to, as the solver draws them ([`receiver_samples`]):
+/// `rays` per form factor, `far.rays` to a receiver outside the source's near field that sees
+/// all of it (0: `rays`; `RAD.SHOT.RAYS` gives it), and none to a receiver that does not face
+/// the source (its form factor is 0). Writes `count` points to `out` and, when `grid` holds a
+/// density, their weights to `weights`, as `RAD.SOURCE.SAMPLES.WEIGHTED.AT` does; `count` is 0
+/// for a receiver that does not face the source, and -1 (nothing written) for the wrong
+/// lengths or ranges that `RAD.SOURCE.SAMPLES.WEIGHTED.AT` refuses, or `far.rays` not in
+/// 0..=`rays`.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn receiver_samples_at(
+    p: *const f32,
+    p_len: Word,
+    n: *const f32,
+    n_len: Word,
+    tri: *const f32,
+    tri_len: Word,
+    rays: Word,
+    far: Word,
+    seed: Word,
+    set: Word,
+    grid: *const f32,
+    grid_len: Word,
+    out: *mut f32,
+    out_len: Word,
+    weights: *mut f32,
+    weights_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (p, n, tri, grid) = unsafe {
+        (
+            point(array(p, p_len)),
+            point(array(n, n_len)),
+            triangle(array(tri, tri_len)),
+            array(grid, grid_len),
+        )
+    };
+    let density = SourceDensity::from_cells(grid);
+    let valid = (1..=MAX_SAMPLES).contains(&rays)
+        && (0..=rays).contains(&far)
+        && (0..=MAX_SKIPPED_SETS).contains(&set)
+        && (grid.is_empty() || density.is_some());
+    let drawn = match (p, n, tri) {
+        (Some(p), Some(n), Some(tri)) if valid => {
+            let config = FormFactorConfig {
+                rays: rays as u32,
+                far_rays: far as u32,
+                ..FormFactorConfig::default()
+            };
+            let mut rng = Pcg32::new(seed as u64, SAMPLE_STREAM);
+            rng.advance(set as u64 * 2 * u64::from(sample_grid(config.rays)).pow(2));
+            let (mut samples, mut w) = (Vec::new(), Vec::new());
+            let density = density.as_ref();
+            receiver_samples(
+                (p, n),
+                &tri,
+                &config,
+                density,
+                &mut rng,
+                &mut samples,
+                &mut w,
+            );
+            Some((samples, w))
+        }
+        _ => None,
+    };
+    let written = match drawn {
+        Some((samples, w))
+            if 3 * samples.len() as Word <= out_len && w.len() as Word <= weights_len =>
+        {
+            // SAFETY: `out` is valid for `out_len` >= 3 × samples floats, `weights` for `w.len()`.
+            let (out, weights) = unsafe {
+                (
+                    std::slice::from_raw_parts_mut(out, 3 * samples.len()),
+                    std::slice::from_raw_parts_mut(weights, w.len()),
+                )
+            };
+            for (o, s) in out.chunks_exact_mut(3).zip(&samples) {
+                o.copy_from_slice(&s.to_array());
+            }
+            weights.copy_from_slice(&w);
+            samples.len() as Word
+        }
+        _ => -1,
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
 }
