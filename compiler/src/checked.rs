@@ -5,6 +5,7 @@
 //! - `names`: every name occurrence that denotes a symbol, to its [`SymbolId`];
 //! - `expr_types`: the type of every expression;
 //! - `constants`: the value of every expression that is a compile-time constant;
+//! - `operators`: the operator expressions that call a user-defined operator FUNCTION;
 //! - `procs`: every PROC and FUNCTION with its parameters and usage summary.
 //!
 //! Spans are unique per node in the preprocessed text, except that a name and the expression
@@ -120,6 +121,9 @@ pub struct CheckedProgram {
     pub expr_types: FxHashMap<Span, Type>,
     /// Constant values, by expression span.
     pub constants: FxHashMap<Span, Value>,
+    /// Operator expressions (`a + b`, `?? a`) that call a user-defined operator FUNCTION, by the
+    /// span of the whole expression, to that FUNCTION's symbol.
+    pub operators: FxHashMap<Span, SymbolId>,
     /// The network configured by the last PROC's `PLACED PAR`, if it has one.
     pub network: Option<crate::network::Network>,
 }

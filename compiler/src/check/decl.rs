@@ -410,6 +410,9 @@ impl Checker {
         function: Option<&ast::FunctionBody>,
         body: Option<&ast::Process>,
     ) {
+        if function.is_some() && super::operator::is_operator_name(&name.text) {
+            self.operator_declaration(name, params.len(), results.len());
+        }
         let results: Vec<Type> = results.iter().map(|t| self.ty(t)).collect();
         let info = ProcInfo {
             name: name.text.clone(),

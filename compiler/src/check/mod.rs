@@ -16,6 +16,7 @@ mod decl;
 mod expr;
 mod external;
 mod io;
+mod operator;
 mod place;
 mod process;
 mod scope;
