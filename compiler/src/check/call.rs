@@ -118,6 +118,21 @@ impl Checker {
             return self.conversion(Type::Named(d), ast::ConvMode::Plain, arg, span);
         }
         let _ = want;
+        if matches!(name.text.as_str(), "WSSIZEOF" | "VSSIZEOF")
+            && self.scope.lookup(&name.text).is_none()
+            && let [arg] = args
+        {
+            let value = self.space_of(&name.text, arg).map(Value::Int);
+            return Typed {
+                ty: if value.is_some() {
+                    Type::INT
+                } else {
+                    Type::Error
+                },
+                value,
+                target: None,
+            };
+        }
         let results = self.call_function(name, args, span);
         match results.as_deref() {
             Some([one]) => Typed {

@@ -326,7 +326,7 @@ impl Checker {
         let t = if defined {
             match self.user_unary(op, operand, want, span) {
                 Ok(called) => return called,
-                Err(t) => t,
+                Err(t) => *t,
             }
         } else {
             self.expr(operand, want)
@@ -386,12 +386,12 @@ impl Checker {
         let (lt, rt) = if self.scope.lookup_all(spelling).next().is_some() {
             match self.user_binary(op, lhs, rhs, span) {
                 Ok(called) => return called,
-                Err(operands) => operands,
+                Err(operands) => *operands,
             }
         } else {
             match self.binary_operands(op, lhs, rhs, want) {
                 Ok(operands) => operands,
-                Err(decided) => return decided,
+                Err(decided) => return *decided,
             }
         };
         if let BinOp::User(u) = op {
@@ -414,7 +414,7 @@ impl Checker {
         lhs: &Expr,
         rhs: &Expr,
         want: Option<&Type>,
-    ) -> Result<(Typed, Typed), Typed> {
+    ) -> Result<(Typed, Typed), Box<Typed>> {
         let boolean = matches!(op, BinOp::And | BinOp::Or);
         let want = if boolean {
             Some(&Type::BOOL)
@@ -433,7 +433,7 @@ impl Checker {
             if decided {
                 let value = lt.value.clone();
                 self.expect_type(&Type::BOOL, &rt.ty, rhs.span);
-                return Err(Typed::constant(Type::BOOL, value));
+                return Err(Box::new(Typed::constant(Type::BOOL, value)));
             }
             (lt, rt)
         } else if consteval::is_shift(op) {

@@ -126,7 +126,7 @@ impl Checker {
         lhs: &Expr,
         rhs: &Expr,
         span: ast::Span,
-    ) -> Result<Typed, (Typed, Typed)> {
+    ) -> Result<Typed, Box<(Typed, Typed)>> {
         let shift = crate::consteval::is_shift(op);
         let lt = (!is_untyped(lhs)).then(|| self.expr(lhs, None));
         let rt = (!is_untyped(rhs)).then(|| self.expr(rhs, None));
@@ -160,7 +160,7 @@ impl Checker {
                 self.expr(rhs, Some(&want))
             }
         };
-        Err((lt, rt))
+        Err(Box::new((lt, rt)))
     }
 
     /// Checks `op operand` against the visible operator FUNCTIONs spelled as `op`: the call
@@ -172,7 +172,7 @@ impl Checker {
         operand: &Expr,
         want: Option<&Type>,
         span: ast::Span,
-    ) -> Result<Typed, Typed> {
+    ) -> Result<Typed, Box<Typed>> {
         let spelling = unary_spelling(op);
         if is_untyped(operand) {
             let guess = literal_default(operand);
@@ -180,12 +180,12 @@ impl Checker {
                 self.expr(operand, found.formals.first());
                 return Ok(self.call_operator(found, span));
             }
-            return Err(self.expr(operand, want));
+            return Err(Box::new(self.expr(operand, want)));
         }
         let t = self.expr(operand, want);
         match self.find_operator(spelling, &[&t.ty]) {
             Some(found) => Ok(self.call_operator(found, span)),
-            None => Err(t),
+            None => Err(Box::new(t)),
         }
     }
 
