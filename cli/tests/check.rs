@@ -109,3 +109,25 @@ fn the_stdlib_is_found_with_no_stdlib_folder() {
     let _ = fs::remove_dir_all(&dir);
     assert!(output.status.success(), "{stderr}");
 }
+
+/// An `ASM` block beyond the subset that runs here is refused at the block, naming the subset.
+#[test]
+fn an_asm_block_beyond_the_subset_is_refused_at_its_line() {
+    let dir = std::env::temp_dir().join(format!("occ-check-{}-asm", std::process::id()));
+    fs::create_dir_all(&dir).expect("temporary folder");
+    let file = dir.join("prog.occ");
+    let source = "PROC p ()\n  INT x:\n  ASM\n    LD ADDRESSOF x\n    LDNL 0\n    ST x\n:\n";
+    fs::write(&file, source).expect("program file");
+    let output = Command::new(env!("CARGO_BIN_EXE_occ"))
+        .arg("run")
+        .arg(&file)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the occ binary runs");
+    let _ = fs::remove_dir_all(&dir);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    for text in ["ASM / GUY blocks beyond LDC, LD", "prog.occ:3:3"] {
+        assert!(stderr.contains(text), "missing `{text}` in\n{stderr}");
+    }
+}

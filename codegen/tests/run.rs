@@ -33,7 +33,7 @@ PROC main (CHAN BYTE keyboard?, screen!, error!)
       screen ! ' '
       out.int (x \ 5, 0, screen!)
       screen ! ' '
-      out.int (MOSTPOS INT PLUS 1, 0, screen!)
+      out.int ((MOSTPOS INT) PLUS 1, 0, screen!)
       screen ! '*n'
 :
 "#;

@@ -5,6 +5,7 @@
 //! - `names`: every name occurrence that denotes a symbol, to its [`SymbolId`];
 //! - `expr_types`: the type of every expression;
 //! - `constants`: the value of every expression that is a compile-time constant;
+//! - `operators`: the operator expressions that call a user-defined operator FUNCTION;
 //! - `procs`: every PROC and FUNCTION with its parameters and usage summary.
 //!
 //! Spans are unique per node in the preprocessed text, except that a name and the expression
@@ -120,6 +121,29 @@ pub struct CheckedProgram {
     pub expr_types: FxHashMap<Span, Type>,
     /// Constant values, by expression span.
     pub constants: FxHashMap<Span, Value>,
+    /// Operator expressions (`a + b`, `?? a`) that call a user-defined operator FUNCTION, by the
+    /// span of the whole expression, to that FUNCTION's symbol.
+    pub operators: FxHashMap<Span, SymbolId>,
     /// The network configured by the last PROC's `PLACED PAR`, if it has one.
     pub network: Option<crate::network::Network>,
+    /// `ASM` blocks written in the subset that runs here (see [`AsmOp`]), by the block's span.
+    pub asm: FxHashMap<Span, Vec<AsmOp>>,
+}
+
+/// One transputer instruction of an `ASM` block in the subset that runs on this machine: the
+/// evaluation stack (A, B, C) as word values, loaded from constants and INT variables and stored
+/// back to INT variables. `LDAB a, b` and `LDABC a, b, c` are pushes of the operands in reverse
+/// order (so that A holds `a`); `STAB` and `STABC` are stores in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AsmOp {
+    /// Push a constant (`LDC n`, `LD n`).
+    Const(i64),
+    /// Push an INT variable's value (`LD x`).
+    Load(SymbolId),
+    /// Store A in an INT variable and pop (`ST x`).
+    Store(SymbolId),
+    /// Pop A (`POP`).
+    Pop,
+    /// Swap A and B (`REV`).
+    Rev,
 }

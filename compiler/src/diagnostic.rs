@@ -46,6 +46,22 @@ pub enum DiagnosticKind {
         /// The operand type.
         ty: String,
     },
+    /// Occurs when a FUNCTION named as an operator is not one a program may define, or has the
+    /// wrong number of parameters or results. Example: `INT FUNCTION "+" (VAL INT a)`.
+    BadOperatorDefinition {
+        /// The operator's spelling.
+        op: String,
+        /// What is wrong.
+        why: &'static str,
+    },
+    /// Occurs when an operator with no built-in meaning is applied to operand types for which
+    /// no definition is in scope. Example: `a ++ b` with no `FUNCTION "++"` taking their types.
+    NoOperator {
+        /// The operator.
+        op: &'static str,
+        /// The operand types, comma-separated.
+        operands: String,
+    },
     /// Occurs when different dyadic operators are mixed without parentheses. Example: `a + b * c`.
     NeedsParentheses,
     /// Occurs when a constant expression is an error in occam (overflow, division by zero, shift
@@ -217,6 +233,12 @@ impl DiagnosticKind {
             }
             BadOperand { op, ty } => format!("operator {op} cannot be applied to {ty}"),
             NeedsParentheses => "different operators need parentheses in occam".into(),
+            BadOperatorDefinition { op, why } => {
+                format!("\"{op}\" cannot be defined as an operator here: {why}")
+            }
+            NoOperator { op, operands } => {
+                format!("no operator {op} is defined for ({operands})")
+            }
             ConstantError { what } => format!("constant {what}"),
             NeedsRounding { from, to } => {
                 format!("conversion from {from} to {to} needs ROUND or TRUNC")
@@ -307,6 +329,9 @@ impl DiagnosticKind {
             Recursion { .. } => {
                 Some("rewrite the recursion as a loop (WHILE) with an explicit stack".into())
             }
+            NoOperator { op, operands } => Some(format!(
+                "declare it, for example `INT FUNCTION \"{op}\" (...)` taking ({operands})"
+            )),
             NeedsRounding { to, .. } => Some(format!(
                 "write `{to} ROUND x` (nearest) or `{to} TRUNC x` (toward zero)"
             )),

@@ -539,6 +539,9 @@ impl<'a> Config<'a> {
         if let Some(v) = self.checked.constants.get(&e.span) {
             return v.as_int().or_else(|| v.as_bool().map(i64::from));
         }
+        if self.checked.operators.contains_key(&e.span) {
+            return None;
+        }
         match &e.kind {
             ExprKind::Name(n) => env.get(&self.symbol(n)?).copied(),
             ExprKind::Conversion { operand, .. } => self.eval(operand, env),
@@ -548,6 +551,7 @@ impl<'a> Config<'a> {
                     UnOp::Neg | UnOp::Minus => v.checked_neg(),
                     UnOp::Not => Some(i64::from(v == 0)),
                     UnOp::BitNot => Some(!v),
+                    UnOp::User(_) => None,
                 }
             }
             ExprKind::Binary { op, lhs, rhs } => {

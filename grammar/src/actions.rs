@@ -38,19 +38,85 @@ pub fn recovered<'a>(state: &mut State, error: ErrorRecovery<usize, Token<'a>, B
         .push(crate::parser::syntax_error(error.error));
 }
 
-/// Operators that may be chained without parentheses (`a + b + c`).
-fn associative(op: BinOp) -> bool {
-    use BinOp::*;
-    matches!(
-        op,
-        Add | Mul | Plus | Times | BitAnd | BitOr | Xor | And | Or
-    )
+/// An operand as parsed, with the form it takes when it is not an operand in occam's sense.
+///
+/// occ21 reads `MOSTPOS T`, `MOSTNEG T`, `SIZE x`, a conversion (`INT x`) and a monadic
+/// operator applied to an operand (`-x`, `NOT b`) as whole expressions, not operands
+/// (tools/occ21/fe/syn2.c, `rexp` returns them without reading further dyadic operators, and
+/// `roperand` does not read them at all): `MOSTPOS INT - 1`, `a + -b`, `INT x + 1` and
+/// `- -x` are syntax errors there and need parentheses. The grammar reads them wherever an
+/// operand may stand, and [`chain`] and [`monadic`] report them.
+#[derive(Debug, Clone)]
+pub struct Term {
+    /// The expression.
+    pub expr: Expr,
+    /// What it is when it is a whole-expression form written without parentheses.
+    pub form: Option<&'static str>,
 }
 
-/// Folds `first op e op e ...` left to right, reporting occam's parenthesis rule: different
-/// operators, or a repeated non-associative one, need parentheses.
-pub fn chain(diags: &mut Vec<Diagnostic>, first: Expr, rest: Vec<((BinOp, Span), Expr)>) -> Expr {
-    let mut lhs = first;
+/// An operand (possibly in parentheses).
+pub fn operand(expr: Expr) -> Term {
+    Term { expr, form: None }
+}
+
+/// A whole-expression form: `what` names it in messages ("a conversion", "MOSTPOS").
+pub fn whole(expr: Expr, what: &'static str) -> Term {
+    Term {
+        expr,
+        form: Some(what),
+    }
+}
+
+/// The code of the diagnostic for a whole-expression form used as an operand.
+const BARE_OPERAND: &str = "parse::BareOperand";
+
+fn bare_operand(term: &Term, what: &'static str, user: &str) -> Diagnostic {
+    Diagnostic::error(
+        term.expr.span,
+        format!("{what} needs parentheses to be the operand of `{user}`"),
+        "I was expecting parentheses around this",
+    )
+    .with_help(
+        "write (MOSTPOS INT) - 1, a + (-b), (INT x) + 1: in occam, MOSTPOS, MOSTNEG, SIZE, \
+         conversions and monadic operators make a whole expression, not an operand",
+    )
+    .with_code(BARE_OPERAND)
+}
+
+/// Builds `op operand`, reporting an operand that is itself a whole-expression form.
+pub fn monadic(diags: &mut Vec<Diagnostic>, op: UnOp, operand: Term, l: usize, r: usize) -> Term {
+    if let Some(what) = operand.form {
+        diags.push(bare_operand(&operand, what, crate::print::unop_text(op)));
+    }
+    let expr = Expr {
+        kind: ExprKind::Unary {
+            op,
+            operand: Box::new(operand.expr),
+        },
+        span: Span::new(l, r),
+    };
+    whole(expr, "a monadic operator's expression")
+}
+
+/// Operators that may be repeated without parentheses (`a AND b AND c`): only `AND` and `OR`,
+/// as in occ21 (tools/occ21/fe/syn2.c, `rrestofexp`: every other operator ends the chain).
+fn associative(op: BinOp) -> bool {
+    matches!(op, BinOp::And | BinOp::Or)
+}
+
+/// Folds `first op e op e ...` left to right, reporting occam's parenthesis rules: two dyadic
+/// operators need parentheses unless both are `AND` or both `OR`, and an operand of a dyadic
+/// operator may not be a whole-expression form (see [`Term`]).
+pub fn chain(diags: &mut Vec<Diagnostic>, first: Term, rest: Vec<((BinOp, Span), Term)>) -> Expr {
+    if let Some(((op, _), _)) = rest.first() {
+        let text = crate::print::binop_text(*op);
+        for term in std::iter::once(&first).chain(rest.iter().map(|(_, t)| t)) {
+            if let Some(what) = term.form {
+                diags.push(bare_operand(term, what, text));
+            }
+        }
+    }
+    let mut lhs = first.expr;
     let mut previous: Option<BinOp> = None;
     for ((op, op_span), rhs) in rest {
         if let Some(prev) = previous
@@ -59,6 +125,7 @@ pub fn chain(diags: &mut Vec<Diagnostic>, first: Expr, rest: Vec<((BinOp, Span),
             diags.push(parenthesis_error(prev, op, op_span));
         }
         previous = Some(op);
+        let rhs = rhs.expr;
         let span = lhs.span.to(rhs.span);
         lhs = Expr {
             kind: ExprKind::Binary {
@@ -85,9 +152,43 @@ fn parenthesis_error(prev: BinOp, op: BinOp, span: Span) -> Diagnostic {
         "I was expecting parentheses before this operator",
     )
     .with_help(format!(
-        "write (a {p} b) {o} c: occam needs parentheses between different operators, \
-             and has no precedence"
+        "write (a {p} b) {o} c: occam has no precedence, and only AND and OR may be repeated \
+         without parentheses"
     ))
+}
+
+/// Drops the report that the start of a constructor's replicator, `[i = -1 FOR n | ...]`, is a
+/// whole-expression form: the grammar reads `i = -1` as an expression, but `-1` is the
+/// replicator's start there, not an operand of `=`.
+pub fn replicator_start(diags: &mut Vec<Diagnostic>, start: &Expr) {
+    diags.retain(|d| {
+        !(d.code.as_deref() == Some(BARE_OPERAND)
+            && d.place == crate::diagnostic::Place::Output(start.span))
+    });
+}
+
+/// Builds the name of an operator FUNCTION, `INT FUNCTION "+" (...)`: its spelling, which
+/// must be an operator a program may define.
+pub fn operator_name<'a>(
+    op: Vec<u8>,
+    l: usize,
+    r: usize,
+) -> Result<Name, ParseError<usize, Token<'a>, Box<Diagnostic>>> {
+    let text = String::from_utf8_lossy(&op).into_owned();
+    if operator_arity(&text).is_none() {
+        let diag = Diagnostic::error(
+            Span::new(l, r),
+            format!("\"{text}\" is not an operator that a program may define"),
+            "I was expecting a FUNCTION name, or an operator such as \"+\" or \"++\"",
+        );
+        return Err(ParseError::User {
+            error: Box::new(diag),
+        });
+    }
+    Ok(Name {
+        text,
+        span: Span::new(l, r),
+    })
 }
 
 /// Builds a conversion.
@@ -116,6 +217,7 @@ pub fn slice(base: Expr, from: Option<Expr>, count: Option<Expr>, l: usize, r: u
 
 /// Builds an array constructor `[i = b FOR n STEP s | v]` from its head `i = b`.
 pub fn constructor<'a>(
+    diags: &mut Vec<Diagnostic>,
     head: Expr,
     count: Expr,
     step: Option<Expr>,
@@ -145,6 +247,7 @@ pub fn constructor<'a>(
             error: Box::new(diag),
         });
     };
+    replicator_start(diags, &rhs);
     let repl = Replicator {
         name,
         base: *rhs,

@@ -361,6 +361,99 @@ pub enum UnOp {
     BitNot,
     /// `NOT x`.
     Not,
+    /// An operator with no built-in meaning, defined by the program (`?? x`).
+    User(UserOp),
+}
+
+/// How many operands an operator that a program may define takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Arity {
+    /// Two (`+`, `AND`, `<`).
+    Dyadic,
+    /// One (`NOT`, `~`).
+    Monadic,
+    /// One or two (`-`, `MINUS`, and every [`UserOp`]).
+    Either,
+}
+
+/// Returns the operand counts of the operator spelled `spelling`, when it is one a program may
+/// define (`INT FUNCTION "+" (...)`), as occ21's `rnameorstring` lists them.
+pub fn operator_arity(spelling: &str) -> Option<Arity> {
+    const DYADIC: &[&str] = &[
+        "+", "/", "*", "\\", "PLUS", "TIMES", "AFTER", "AND", "OR", "><", "/\\", "\\/", ">>", "<<",
+        "=", "<>", "<", ">", "<=", ">=",
+    ];
+    if DYADIC.contains(&spelling) {
+        return Some(Arity::Dyadic);
+    }
+    if matches!(spelling, "~" | "NOT") {
+        return Some(Arity::Monadic);
+    }
+    let either =
+        matches!(spelling, "-" | "MINUS") || UserOp::ALL.iter().any(|(_, text)| *text == spelling);
+    either.then_some(Arity::Either)
+}
+
+/// The operator symbols KRoC's occ21 lets a program define (`INT FUNCTION "++" (...)`) and that
+/// have no built-in meaning. Each may be used monadic or dyadic, as its definitions allow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[allow(
+    missing_docs,
+    reason = "each variant is the operator spelled in `UserOp::text`"
+)]
+pub enum UserOp {
+    DQuery,
+    DAt,
+    DDollar,
+    Percent,
+    DPercent,
+    DAmp,
+    LeftPercent,
+    PercentRight,
+    LeftAmp,
+    AmpRight,
+    RotLeft,
+    RotRight,
+    DPlus,
+    Hat,
+    DBang,
+    DEq,
+    LeftAt,
+    AtRight,
+    At,
+}
+
+impl UserOp {
+    /// Every user-definable operator with its spelling.
+    pub const ALL: [(UserOp, &'static str); 19] = [
+        (UserOp::DQuery, "??"),
+        (UserOp::DAt, "@@"),
+        (UserOp::DDollar, "$$"),
+        (UserOp::Percent, "%"),
+        (UserOp::DPercent, "%%"),
+        (UserOp::DAmp, "&&"),
+        (UserOp::LeftPercent, "<%"),
+        (UserOp::PercentRight, "%>"),
+        (UserOp::LeftAmp, "<&"),
+        (UserOp::AmpRight, "&>"),
+        (UserOp::RotLeft, "<]"),
+        (UserOp::RotRight, "[>"),
+        (UserOp::DPlus, "++"),
+        (UserOp::Hat, "^"),
+        (UserOp::DBang, "!!"),
+        (UserOp::DEq, "=="),
+        (UserOp::LeftAt, "<@"),
+        (UserOp::AtRight, "@>"),
+        (UserOp::At, "@"),
+    ];
+
+    /// Returns the operator's spelling.
+    pub fn text(self) -> &'static str {
+        UserOp::ALL
+            .iter()
+            .find(|(op, _)| *op == self)
+            .map_or("?", |(_, s)| s)
+    }
 }
 
 /// Dyadic operators.
@@ -410,6 +503,8 @@ pub enum BinOp {
     Ge,
     /// `AFTER` (modulo comparison of times).
     After,
+    /// An operator with no built-in meaning, defined by the program (`a ++ b`).
+    User(UserOp),
 }
 
 /// The three forms of conversion.

@@ -346,6 +346,7 @@ fn continues(token: &Token) -> bool {
             true
         }
         T::Le | T::Ge | T::Amp | T::ColonColon | T::LParen | T::LBracket | T::Bar => true,
+        T::UserOp(_) => true,
         T::Keyword(kw) => matches!(
             kw,
             Kw::Is

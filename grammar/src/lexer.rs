@@ -3,10 +3,12 @@
 
 use logos::Logos;
 
+use crate::ast::UserOp;
+
 /// Why a piece of text is not a token.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub enum LexError {
-    /// Occurs when a character cannot start any token (`$`, `@`).
+    /// Occurs when a character cannot start any token (`$`, `` ` ``).
     #[default]
     BadCharacter,
     /// Occurs when an integer literal does not fit in 64 bits (`99999999999999999999`).
@@ -174,6 +176,28 @@ pub enum Token<'a> {
     #[token(">=")]
     /// `>=`.
     Ge,
+
+    /// An operator with no built-in meaning, which a program may define (`a ++ b`, `?? a`).
+    #[token("??", |_| UserOp::DQuery)]
+    #[token("@@", |_| UserOp::DAt)]
+    #[token("$$", |_| UserOp::DDollar)]
+    #[token("%", |_| UserOp::Percent)]
+    #[token("%%", |_| UserOp::DPercent)]
+    #[token("&&", |_| UserOp::DAmp)]
+    #[token("<%", |_| UserOp::LeftPercent)]
+    #[token("%>", |_| UserOp::PercentRight)]
+    #[token("<&", |_| UserOp::LeftAmp)]
+    #[token("&>", |_| UserOp::AmpRight)]
+    #[token("<]", |_| UserOp::RotLeft)]
+    #[token("[>", |_| UserOp::RotRight)]
+    #[token("++", |_| UserOp::DPlus)]
+    #[token("^", |_| UserOp::Hat)]
+    #[token("!!", |_| UserOp::DBang)]
+    #[token("==", |_| UserOp::DEq)]
+    #[token("<@", |_| UserOp::LeftAt)]
+    #[token("@>", |_| UserOp::AtRight)]
+    #[token("@", |_| UserOp::At)]
+    UserOp(UserOp),
 
     /// A keyword (upper case, exactly as listed in [`KEYWORDS`]; made from a name by the layout
     /// pass).

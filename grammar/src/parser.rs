@@ -184,6 +184,7 @@ fn occam_term(terminal: &str) -> String {
         "CHARLIT" => "a character".to_string(),
         "STRLIT" => "a string".to_string(),
         "ASMBODY" => "an ASM body".to_string(),
+        "USEROP" => "a user-defined operator (`++`, `??`, ...)".to_string(),
         "TABLEOPEN" => "`[`".to_string(),
         "BLOCKOPEN" => "`(`".to_string(),
         quoted => format!("`{}`", quoted.trim_matches('"').replace("\\\\", "\\")),

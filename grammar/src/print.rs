@@ -61,6 +61,18 @@ pub fn binop_text(op: BinOp) -> &'static str {
         Le => "<=",
         Ge => ">=",
         After => "AFTER",
+        User(u) => u.text(),
+    }
+}
+
+/// The spelling of a monadic operator.
+pub fn unop_text(op: UnOp) -> &'static str {
+    match op {
+        UnOp::Neg => "-",
+        UnOp::Minus => "MINUS",
+        UnOp::BitNot => "~",
+        UnOp::Not => "NOT",
+        UnOp::User(u) => u.text(),
     }
 }
 
@@ -98,6 +110,7 @@ pub fn token_text(token: &Token) -> &'static str {
         T::Gt => ">",
         T::Le => "<=",
         T::Ge => ">=",
+        T::UserOp(u) => u.text(),
         _ => "token",
     }
 }
@@ -261,7 +274,9 @@ impl Printer {
     ) {
         let results: Vec<String> = results.iter().map(ty_s).collect();
         let inline = if inline { "INLINE " } else { "" };
-        let is_name = name.text.starts_with(|c: char| c.is_ascii_alphabetic());
+        // An operator's name (`"+"`, `"PLUS"`) is written as a string.
+        let is_name = name.text.starts_with(|c: char| c.is_ascii_alphabetic())
+            && crate::lexer::keyword(&name.text).is_none();
         let shown = if is_name {
             name.text.clone()
         } else {
@@ -620,12 +635,8 @@ fn write_expr(s: &mut String, e: &Expr) {
             s.push(']');
         }
         ExprKind::Unary { op, operand: o } => {
-            s.push_str(match op {
-                UnOp::Neg => "- ",
-                UnOp::Minus => "MINUS ",
-                UnOp::BitNot => "~ ",
-                UnOp::Not => "NOT ",
-            });
+            s.push_str(unop_text(*op));
+            s.push(' ');
             operand(s, o);
         }
         ExprKind::Binary { op, lhs, rhs } => {

@@ -73,6 +73,8 @@ pub struct LineOrigin {
     pub shift: usize,
     /// Bytes added by expanding leading tabs to spaces (tab stops every eight columns).
     pub expanded: usize,
+    /// Columns taken off the line's indentation by `#RELAX`.
+    pub relaxed: usize,
 }
 
 /// A location in an original file.
@@ -117,8 +119,8 @@ impl SourceMap {
             .checked_sub(1)?;
         let origin = self.lines.get(index)?;
         let file = self.files.get(origin.file)?;
-        let col =
-            (span.start - self.out_starts[index]).saturating_sub(origin.shift + origin.expanded);
+        let col = (span.start - self.out_starts[index] + origin.relaxed)
+            .saturating_sub(origin.shift + origin.expanded);
         let line_start = file.line_start(origin.line);
         let line_end = file
             .text

@@ -139,9 +139,10 @@ accepts!(
     "SEQ\n  x := a /\\ b\n  y := a \\/ b\n  z := a >< b\n  w := ~a\n  v := a << 2\n  u := a BITAND b"
 );
 accepts!(
-    same_operator_chains,
-    "SEQ\n  x := a + b + c\n  y := p AND q AND r"
+    and_or_chains,
+    "SEQ\n  x := p AND q AND r\n  y := p OR q OR r"
 );
+rejects!(same_operator_chain, "x := a + b + c", 1, "parentheses");
 accepts!(remainder, "SEQ\n  x := a \\ b\n  y := a REM b");
 accepts!(
     retypes_reshapes,
@@ -233,7 +234,7 @@ fn shared_parameter_types_expand() {
 }
 
 #[test]
-fn same_operator_chain_is_left_associative() {
+fn and_chain_is_left_associative() {
     let p = process("x := a - b");
     let ProcessKind::Assign { rhs, .. } = p.kind else {
         panic!()
@@ -242,14 +243,14 @@ fn same_operator_chain_is_left_associative() {
         rhs[0].kind,
         ExprKind::Binary { op: BinOp::Sub, .. }
     ));
-    let p = process("x := a + b + c");
+    let p = process("x := a AND b AND c");
     let ProcessKind::Assign { rhs, .. } = p.kind else {
         panic!()
     };
     let ExprKind::Binary { lhs, .. } = &rhs[0].kind else {
         panic!()
     };
-    assert!(matches!(lhs.kind, ExprKind::Binary { op: BinOp::Add, .. }));
+    assert!(matches!(lhs.kind, ExprKind::Binary { op: BinOp::And, .. }));
 }
 
 #[test]

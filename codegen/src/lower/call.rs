@@ -3,9 +3,11 @@
 
 use cranelift_codegen::ir::{InstBuilder, Value, types};
 use cranelift_module::Module;
-use occ_compiler::checked::SymbolKind;
+use occ_compiler::checked::{SymbolId, SymbolKind};
 use occ_compiler::types::Type;
-use occ_grammar::ast::{Decl, DeclKind, Expr, FunctionBody, Name, Param, ParamMode, Span, Valof};
+use occ_grammar::ast::{
+    Decl, DeclKind, Expr, ExprKind, FunctionBody, Name, Param, ParamMode, Span, Valof,
+};
 use occ_runtime::abi::slot;
 use occ_runtime::intrinsic::{self, ParamKind};
 
@@ -205,6 +207,26 @@ impl Tr<'_, '_> {
                     .unsupported(span, format!("call of `{}`", name.text)));
             }
         };
+        let args: Vec<&Expr> = args.iter().collect();
+        self.expand_function(&d, &args, span)
+    }
+
+    /// Lowers an operator expression `e` that calls the user-defined operator FUNCTION `sym`
+    /// (the checker's `operators` table) and returns its results.
+    pub fn call_operator(&mut self, sym: SymbolId, e: &Expr) -> Res<Vec<Value>> {
+        let args: Vec<&Expr> = match &e.kind {
+            ExprKind::Unary { operand, .. } => vec![operand],
+            ExprKind::Binary { lhs, rhs, .. } => vec![lhs, rhs],
+            _ => return Err(self.cx.internal(e.span, "operator call of a non-operator")),
+        };
+        let Some(Storage::Function(d)) = self.cx.env.get(&sym).cloned() else {
+            return Err(self.cx.internal(e.span, "operator FUNCTION not compiled"));
+        };
+        self.expand_function(&d, &args, e.span)
+    }
+
+    /// Expands the FUNCTION declared by `d` inline with the actuals `args`.
+    fn expand_function(&mut self, d: &Decl, args: &[&Expr], span: Span) -> Res<Vec<Value>> {
         let DeclKind::Function { params, body, .. } = &d.kind else {
             return Err(self.cx.internal(span, "not a FUNCTION"));
         };

@@ -50,6 +50,13 @@ impl Tr<'_, '_> {
         {
             return Ok(v);
         }
+        if let Some(&sym) = self.cx.checked.operators.get(&e.span) {
+            let vals = self.call_operator(sym, e)?;
+            return vals
+                .into_iter()
+                .next()
+                .ok_or_else(|| self.cx.internal(e.span, "operator without result"));
+        }
         match &e.kind {
             ExprKind::Name(_) | ExprKind::Subscript { .. } => {
                 let l = self.place(e)?;
@@ -111,6 +118,7 @@ impl Tr<'_, '_> {
             UnOp::Not => self.b.ins().bxor_imm_s(v, 1),
             UnOp::BitNot => self.b.ins().bnot(v),
             UnOp::Minus => self.b.ins().ineg(v),
+            UnOp::User(_) => return Err(self.cx.internal(e.span, "undefined operator")),
             UnOp::Neg => {
                 if p.is_real() {
                     self.b.ins().fneg(v)
@@ -142,6 +150,15 @@ impl Tr<'_, '_> {
                     Some(fields) => self.record_value(items, fields, ty, e),
                     None => self.table(items, ty, e),
                 }
+            }
+            ExprKind::Unary { .. } | ExprKind::Binary { .. }
+                if !is_scalar(&self.cx.checked.types, &ty) =>
+            {
+                let Some(&sym) = self.cx.checked.operators.get(&e.span) else {
+                    return Err(self.cx.internal(e.span, "array-valued built-in operator"));
+                };
+                let vals = self.call_operator(sym, e)?;
+                self.result_loc(vals, ty, e)
             }
             ExprKind::Call { name, args } if !is_scalar(&self.cx.checked.types, &ty) => {
                 let vals = self.call_function(name, args, e.span)?;

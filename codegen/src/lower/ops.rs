@@ -44,6 +44,7 @@ impl Tr<'_, '_> {
                 Ok(self.b.ins().icmp_imm_s(IntCC::SignedGreaterThan, d, 0))
             }
             BinOp::Shl | BinOp::Shr => self.shift(op, p, a, b, e.span),
+            BinOp::User(_) => Err(self.cx.internal(e.span, "undefined operator")),
             _ => self.arith(op, p, a, b, e.span),
         }
     }

@@ -118,6 +118,21 @@ impl Checker {
             return self.conversion(Type::Named(d), ast::ConvMode::Plain, arg, span);
         }
         let _ = want;
+        if matches!(name.text.as_str(), "WSSIZEOF" | "VSSIZEOF")
+            && self.scope.lookup(&name.text).is_none()
+            && let [arg] = args
+        {
+            let value = self.space_of(&name.text, arg).map(Value::Int);
+            return Typed {
+                ty: if value.is_some() {
+                    Type::INT
+                } else {
+                    Type::Error
+                },
+                value,
+                target: None,
+            };
+        }
         let results = self.call_function(name, args, span);
         match results.as_deref() {
             Some([one]) => Typed {
@@ -333,21 +348,26 @@ impl Checker {
         }
         self.check_ref_aliases(&refs);
         if let Some(pid) = pid {
-            let first_param = self.out.procs[pid].params.first().copied();
-            let free: Vec<Access> = self.out.procs[pid]
-                .usage
-                .iter()
-                .filter(|a| first_param.is_none_or(|p| a.symbol < p))
-                .copied()
-                .collect();
-            // The body was checked against the abbreviations in scope where it was declared;
-            // only those declared since can be aliased by this call.
-            self.alias_floor = self.out.procs[pid].symbol;
-            for a in free {
-                self.record(a.symbol, a.mode, a.part, span);
-            }
-            self.alias_floor = None;
+            self.free_variables_of(pid, span);
         }
+    }
+
+    /// Records, at a call of `pid`, the accesses its body makes to variables declared outside it.
+    pub(super) fn free_variables_of(&mut self, pid: ProcId, span: ast::Span) {
+        let first_param = self.out.procs[pid].params.first().copied();
+        let free: Vec<Access> = self.out.procs[pid]
+            .usage
+            .iter()
+            .filter(|a| first_param.is_none_or(|p| a.symbol < p))
+            .copied()
+            .collect();
+        // The body was checked against the abbreviations in scope where it was declared;
+        // only those declared since can be aliased by this call.
+        self.alias_floor = self.out.procs[pid].symbol;
+        for a in free {
+            self.record(a.symbol, a.mode, a.part, span);
+        }
+        self.alias_floor = None;
     }
 
     /// Checks one actual; returns the storage a data reference parameter names.

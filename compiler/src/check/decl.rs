@@ -165,7 +165,8 @@ impl Checker {
                             name.span,
                         );
                     }
-                    self.declare(name, SymbolKind::Variable, ty.clone(), assignable);
+                    let id = self.declare(name, SymbolKind::Variable, ty.clone(), assignable);
+                    self.take_workspace(id, &ty);
                 }
             }
             DeclKind::Abbrev {
@@ -200,8 +201,12 @@ impl Checker {
                 self.expect_type(&Type::INT, &t.ty, at.span);
             }
             DeclKind::Asm(_) => {}
-            DeclKind::PlaceIn { name, .. } => {
-                self.lookup(name);
+            DeclKind::PlaceIn { name, area } => {
+                if let Some(id) = self.lookup(name)
+                    && area.text == "VECSPACE"
+                {
+                    self.move_to_vecspace(id);
+                }
             }
         }
     }
@@ -410,6 +415,9 @@ impl Checker {
         function: Option<&ast::FunctionBody>,
         body: Option<&ast::Process>,
     ) {
+        if function.is_some() && super::operator::is_operator_name(&name.text) {
+            self.operator_declaration(name, params.len(), results.len());
+        }
         let results: Vec<Type> = results.iter().map(|t| self.ty(t)).collect();
         let info = ProcInfo {
             name: name.text.clone(),
@@ -423,11 +431,16 @@ impl Checker {
         let first = self.next_symbol();
         let all_val = params.iter().all(|p| p.mode == ParamMode::Val);
         let names: Vec<ast::Name> = params.iter().map(|p| p.name.clone()).collect();
+        self.space.push((0, 0));
         let params: Vec<SymbolId> = params
             .iter()
             .enumerate()
             .map(|(i, p)| self.param(p, pid, i, first))
             .collect();
+        let param_words: i64 = params.iter().map(|&p| param_words(&self.sym(p).ty)).sum();
+        if let Some(top) = self.space.last_mut() {
+            top.0 += param_words;
+        }
         self.open_procs.push(name.text.clone());
         self.push_frame();
         if let Some(body) = body {
@@ -446,6 +459,9 @@ impl Checker {
             }
         }
         let usage = self.pop_frame();
+        if let Some(space) = self.space.pop() {
+            self.spaces.insert(pid, space);
+        }
         if function.is_some() {
             self.no_side_effects(&usage, first);
         }
@@ -530,6 +546,91 @@ impl Checker {
                 }
             }
         }
+    }
+}
+
+/// The workspace words a parameter takes: a word for its value or address, and one more for
+/// the size of each open dimension of an array.
+fn param_words(ty: &Type) -> i64 {
+    match ty {
+        Type::Array(None, e) => 1 + param_words(e),
+        Type::Array(Some(_), e) => param_words(e).max(1),
+        _ => 1,
+    }
+}
+
+impl Checker {
+    /// The words (32-bit, as `TARGET.BITS.PER.WORD` says) a local of type `ty` takes: its data
+    /// rounded up to words, a word for each channel, timer or port.
+    fn words(&self, ty: &Type) -> i64 {
+        if let Ok(bytes) = crate::types::bytes_in(&self.out.types, ty) {
+            return (i64::from(bytes) + 3) / 4;
+        }
+        match self.out.types.underlying(ty) {
+            Type::Array(Some(n), e) => i64::from(*n).saturating_mul(self.words(e)),
+            _ => 1,
+        }
+    }
+
+    /// Counts a local variable in the workspace of the routine being checked.
+    fn take_workspace(&mut self, id: SymbolId, ty: &Type) {
+        if self.space.is_empty() || self.shadow > 0 {
+            return;
+        }
+        let words = self.words(ty);
+        self.local_words.insert(id, words);
+        if let Some(top) = self.space.last_mut() {
+            top.0 += words;
+        }
+    }
+
+    /// `PLACE x IN VECSPACE:`: the words of `x` move from the workspace to the vector space.
+    fn move_to_vecspace(&mut self, id: SymbolId) {
+        if let Some(words) = self.local_words.remove(&id)
+            && let Some(top) = self.space.last_mut()
+        {
+            top.0 -= words;
+            top.1 += words;
+        }
+    }
+
+    /// `WSSIZEOF(r)` / `VSSIZEOF(r)`: the workspace or vector space, in words, of a routine
+    /// declared before this point, counted from the data it declares (its parameters and
+    /// locals; a local placed `IN VECSPACE` counts in the vector space).
+    pub(super) fn space_of(&mut self, which: &str, arg: &ast::Expr) -> Option<i64> {
+        let ast::ExprKind::Name(n) = &arg.kind else {
+            let op = if which == "WSSIZEOF" {
+                "WSSIZEOF"
+            } else {
+                "VSSIZEOF"
+            };
+            self.error(
+                DiagnosticKind::BadOperand {
+                    op,
+                    ty: "an expression: it takes the name of a PROC or FUNCTION".into(),
+                },
+                arg.span,
+            );
+            return None;
+        };
+        let id = self.lookup(n)?;
+        let pid = match self.sym(id).kind {
+            SymbolKind::Proc(pid) | SymbolKind::Function(pid) => pid,
+            ref other => {
+                let found = kind_name(other);
+                self.error(
+                    DiagnosticKind::WrongKind {
+                        name: n.text.clone(),
+                        expected: "a PROC or FUNCTION",
+                        found,
+                    },
+                    arg.span,
+                );
+                return None;
+            }
+        };
+        let (ws, vs) = self.spaces.get(&pid).copied().unwrap_or_default();
+        Some(if which == "WSSIZEOF" { ws } else { vs })
     }
 }
 

@@ -40,7 +40,7 @@ impl Typed {
 }
 
 /// Reports whether an expression's type comes only from context (untyped literals).
-fn is_untyped(e: &Expr) -> bool {
+pub(super) fn is_untyped(e: &Expr) -> bool {
     match &e.kind {
         ExprKind::Literal(l) => {
             l.ty.is_none()
@@ -306,7 +306,10 @@ impl Checker {
         want: Option<&Type>,
         span: ast::Span,
     ) -> Typed {
+        let spelling = super::operator::unary_spelling(op);
+        let defined = self.scope.lookup_all(spelling).next().is_some();
         if op == ast::UnOp::Neg
+            && !defined
             && let ExprKind::Literal(l) = &operand.kind
             && matches!(l.kind, LitKind::Int { hex: false, .. } | LitKind::Real(_))
         {
@@ -320,7 +323,18 @@ impl Checker {
         } else {
             want
         };
-        let t = self.expr(operand, want);
+        let t = if defined {
+            match self.user_unary(op, operand, want, span) {
+                Ok(called) => return called,
+                Err(t) => *t,
+            }
+        } else {
+            self.expr(operand, want)
+        };
+        if let ast::UnOp::User(u) = op {
+            self.undefined_operator(u, &[&t.ty], span);
+            return Typed::of(Type::Error);
+        }
         let Some(prim) = self.operand_prim(&t.ty, consteval::un_symbol(op), operand.span) else {
             return Typed::of(t.ty);
         };
@@ -368,6 +382,39 @@ impl Checker {
         {
             return self.list_compare(op, ls, rs, span);
         }
+        let spelling = super::operator::binary_spelling(op);
+        let (lt, rt) = if self.scope.lookup_all(spelling).next().is_some() {
+            match self.user_binary(op, lhs, rhs, span) {
+                Ok(called) => return called,
+                Err(operands) => *operands,
+            }
+        } else {
+            match self.binary_operands(op, lhs, rhs, want) {
+                Ok(operands) => operands,
+                Err(decided) => return *decided,
+            }
+        };
+        if let BinOp::User(u) = op {
+            self.undefined_operator(u, &[&lt.ty, &rt.ty], span);
+            return Typed::of(Type::Error);
+        }
+        if consteval::is_shift(op) {
+            self.expect_type(&Type::INT, &rt.ty, rhs.span);
+        } else if !self.expect_type(&lt.ty, &rt.ty, rhs.span) {
+            return Typed::of(Type::Error);
+        }
+        self.builtin_binary(op, lt, rt, span)
+    }
+
+    /// Types the operands of a built-in dyadic operator; `Err` with the whole expression's
+    /// value when `FALSE AND e` or `TRUE OR e` is decided by its left operand.
+    fn binary_operands(
+        &mut self,
+        op: BinOp,
+        lhs: &Expr,
+        rhs: &Expr,
+        want: Option<&Type>,
+    ) -> Result<(Typed, Typed), Box<Typed>> {
         let boolean = matches!(op, BinOp::And | BinOp::Or);
         let want = if boolean {
             Some(&Type::BOOL)
@@ -386,13 +433,12 @@ impl Checker {
             if decided {
                 let value = lt.value.clone();
                 self.expect_type(&Type::BOOL, &rt.ty, rhs.span);
-                return Typed::constant(Type::BOOL, value);
+                return Err(Box::new(Typed::constant(Type::BOOL, value)));
             }
             (lt, rt)
         } else if consteval::is_shift(op) {
             let lt = self.expr(lhs, want);
             let rt = self.expr(rhs, Some(&Type::INT));
-            self.expect_type(&Type::INT, &rt.ty, rhs.span);
             (lt, rt)
         } else if is_untyped(lhs) && !is_untyped(rhs) {
             let rt = self.expr(rhs, want);
@@ -402,9 +448,11 @@ impl Checker {
             let rt = self.expr(rhs, Some(&lt.ty));
             (lt, rt)
         };
-        if !consteval::is_shift(op) && !self.expect_type(&lt.ty, &rt.ty, rhs.span) {
-            return Typed::of(Type::Error);
-        }
+        Ok((lt, rt))
+    }
+
+    /// Applies a built-in dyadic operator to checked operands of matching types.
+    fn builtin_binary(&mut self, op: BinOp, lt: Typed, rt: Typed, span: ast::Span) -> Typed {
         let sym = consteval::bin_symbol(op);
         let result = if consteval::is_relational(op) {
             Type::BOOL

@@ -11,11 +11,13 @@
 //! - `frames` always has at least one frame; accesses are recorded in the innermost;
 //! - `abbreviated` lists, innermost last, the storage that a live abbreviation names.
 
+mod asm;
 mod call;
 mod decl;
 mod expr;
 mod external;
 mod io;
+mod operator;
 mod place;
 mod process;
 mod scope;
@@ -93,6 +95,12 @@ pub(crate) struct Checker {
     valof_depth: u32,
     /// Inside the first (high-priority) branch of a PRI PAR: no PRI PAR there.
     high_priority: bool,
+    /// The workspace and vector space, in words, of each routine being checked, innermost last.
+    space: Vec<(i64, i64)>,
+    /// The words each local variable takes, for `PLACE x IN VECSPACE:`.
+    local_words: crate::fxhash::FxHashMap<SymbolId, i64>,
+    /// The finished workspace and vector space of each routine, for `WSSIZEOF` / `VSSIZEOF`.
+    spaces: crate::fxhash::FxHashMap<crate::checked::ProcId, (i64, i64)>,
 }
 
 /// Checks that a program can switch off, as occ21's `#OPTION` letters do.
@@ -176,6 +184,9 @@ impl Checker {
             repl_values: Default::default(),
             valof_depth: 0,
             high_priority: false,
+            space: Vec::new(),
+            local_words: Default::default(),
+            spaces: Default::default(),
         };
         for pragma in &program.pragmas {
             let set = match pragma.kind {

@@ -345,6 +345,11 @@ impl Checker {
                 };
                 named.then_some(Lin::var(id))
             }
+            ExprKind::Binary { .. } | ExprKind::Unary { .. }
+                if self.out.operators.contains_key(&e.span) =>
+            {
+                None
+            }
             ExprKind::Binary { op, lhs, rhs } => {
                 let (l, r) = (self.linear(lhs)?, self.linear(rhs)?);
                 combine(*op, l, r)
@@ -429,6 +434,9 @@ impl Checker {
         use crate::types::Prim;
         if let Some(c) = self.out.constants.get(&e.span).and_then(Value::as_int) {
             return Some(c);
+        }
+        if self.out.operators.contains_key(&e.span) {
+            return None;
         }
         match &e.kind {
             ExprKind::Name(n) => (self.out.names.get(&n.span) == Some(&var)).then_some(v),

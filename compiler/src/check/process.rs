@@ -22,7 +22,8 @@ impl Checker {
     /// Checks a process.
     pub(super) fn process(&mut self, p: &Process) {
         match &p.kind {
-            ProcessKind::Skip | ProcessKind::Stop | ProcessKind::Asm(_) => {}
+            ProcessKind::Skip | ProcessKind::Stop => {}
+            ProcessKind::Asm(block) => self.asm(block, p.span),
             ProcessKind::Scope { decls, body } => {
                 let mark = self.open_scope();
                 self.decls(decls);

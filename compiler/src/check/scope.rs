@@ -37,4 +37,13 @@ impl Scope {
     pub fn lookup(&self, name: &str) -> Option<SymbolId> {
         self.names.get(name).and_then(|s| s.last().copied())
     }
+
+    /// Iterates over every visible declaration of `name`, innermost first (for operators,
+    /// which overload one another).
+    pub fn lookup_all(&self, name: &str) -> impl Iterator<Item = SymbolId> + '_ {
+        self.names
+            .get(name)
+            .into_iter()
+            .flat_map(|s| s.iter().rev().copied())
+    }
 }

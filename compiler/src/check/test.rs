@@ -84,9 +84,9 @@ rejects!(constant_division_by_zero, "VAL INT x IS 1 / 0:\nPROC p ()\n  SKIP\n:",
 rejects!(literal_out_of_range, "VAL BYTE b IS 256:\nPROC p ()\n  SKIP\n:", 1, "literal out of range for BYTE");
 rejects!(shift_out_of_range, "VAL INT x IS 1 << 33:\nPROC p ()\n  SKIP\n:", 1, "shift count 33");
 accepts!(mostneg_literal, "VAL INT x IS -2147483648:\nVAL INT y IS MOSTNEG INT:\nPROC p ()\n  SKIP\n:");
-accepts!(modulo_ops_do_not_overflow, "VAL INT x IS MOSTPOS INT PLUS 1:\nPROC p ()\n  SKIP\n:");
+accepts!(modulo_ops_do_not_overflow, "VAL INT x IS (MOSTPOS INT) PLUS 1:\nPROC p ()\n  SKIP\n:");
 rejects!(array_size_not_constant, "PROC p (VAL INT n)\n  [n]INT a:\n  SKIP\n:", 2, "array size must be a constant");
-accepts!(array_size_from_constants, "VAL INT n IS 4:\nVAL []INT t IS [1, 2, 3]:\nPROC p ()\n  [n * SIZE t]INT a:\n  a[11] := 0\n:");
+accepts!(array_size_from_constants, "VAL INT n IS 4:\nVAL []INT t IS [1, 2, 3]:\nPROC p ()\n  [n * (SIZE t)]INT a:\n  a[11] := 0\n:");
 rejects!(constant_subscript_out_of_range, "PROC p ()\n  [4]INT a:\n  a[4] := 0\n:", 3, "out of range");
 rejects!(case_duplicate, "PROC p (VAL INT x)\n  CASE x\n    1\n      SKIP\n    1\n      SKIP\n:", 5, "appears more than once");
 rejects!(case_not_constant, "PROC p (VAL INT x, y)\n  CASE x\n    y\n      SKIP\n:", 3, "CASE option must be a constant");

@@ -30,17 +30,13 @@ pub fn bin_accepts(op: BinOp, prim: Prim) -> bool {
         BitAnd | BitOr | Xor | Shl | Shr => prim.is_integer(),
         And | Or => prim == Prim::Bool,
         Eq | Ne => true,
+        User(_) => false,
     }
 }
 
 /// Returns a unary operator as occam spells it.
 pub fn un_symbol(op: UnOp) -> &'static str {
-    match op {
-        UnOp::Neg => "-",
-        UnOp::Minus => "MINUS",
-        UnOp::BitNot => "~",
-        UnOp::Not => "NOT",
-    }
+    occ_grammar::print::unop_text(op)
 }
 
 /// Reports whether `prim` is an operand type the unary operator accepts.
@@ -49,6 +45,7 @@ pub fn un_accepts(op: UnOp, prim: Prim) -> bool {
         UnOp::Neg => prim.is_numeric(),
         UnOp::Minus | UnOp::BitNot => prim.is_integer(),
         UnOp::Not => prim == Prim::Bool,
+        UnOp::User(_) => false,
     }
 }
 

@@ -107,6 +107,8 @@ struct Cond {
     parent: bool,
     /// Where the `#IF` is, for an unclosed-`#IF` error.
     at: Location,
+    /// A `#RELAX` in the current branch: its lines are read two columns to the left.
+    relaxed: bool,
 }
 
 /// The position of a directive line being processed.
@@ -163,10 +165,11 @@ impl Preprocessor<'_> {
                 text: raw,
             };
             let active = conds.last().is_none_or(|c| c.active);
+            let relax = 2 * conds.iter().filter(|c| c.relaxed).count();
             match directive_word(raw) {
                 Some(word) => self.directive(&line, word, &mut conds, active, depth),
-                None if active => self.emit(&line, raw),
-                None => self.emit(&line, ""),
+                None if active => self.emit(&line, raw, relax),
+                None => self.emit(&line, "", 0),
             }
         }
         for cond in conds {
@@ -174,16 +177,19 @@ impl Preprocessor<'_> {
         }
     }
 
-    /// Appends one output line, expanding tabs in its indentation.
-    fn emit(&mut self, line: &Line, text: &str) {
+    /// Appends one output line, expanding tabs in its indentation and taking `relax` columns
+    /// off it (`#RELAX`).
+    fn emit(&mut self, line: &Line, text: &str, relax: usize) {
         let body = text.trim_start_matches([' ', '\t']);
         let indent = &text[..text.len() - body.len()];
-        let columns = columns(indent);
+        let relaxed = relax.min(columns(indent));
+        let columns = columns(indent) - relaxed;
         let origin = LineOrigin {
             file: line.file,
             line: line.line,
             shift: line.shift,
-            expanded: columns - indent.len(),
+            expanded: (columns + relaxed) - indent.len(),
+            relaxed,
         };
         self.out.map.push_line(self.out.text.len(), origin);
         if !body.is_empty() {
@@ -202,6 +208,7 @@ impl Preprocessor<'_> {
             line: line.line,
             shift: line.shift,
             expanded: 0,
+            relaxed: 0,
         };
         self.out.map.push_line(self.out.text.len(), origin);
         self.out
@@ -228,6 +235,7 @@ impl Preprocessor<'_> {
             "IF" => self.open_if(line, rest, conds, active),
             "ELIF" => self.elif(line, rest, conds),
             "ELSE" => self.else_(line, conds),
+            "RELAX" if active => self.relax(line, conds),
             "ENDIF" => {
                 if conds.pop().is_none() {
                     let at = line.whole(&self.out.map);
@@ -243,7 +251,7 @@ impl Preprocessor<'_> {
             }
             "PRAGMA" => self.pragma(line, rest),
             "OPTION" => self.out.options.push_str(option_letters(rest)),
-            "COMMENT" | "IMPORT" | "RELAX" => {}
+            "COMMENT" | "IMPORT" => {}
             _ => {
                 let at = line.whole(&self.out.map);
                 let message = format!("unknown directive #{word}");
@@ -260,7 +268,25 @@ impl Preprocessor<'_> {
             taken: value,
             parent: active,
             at: line.whole(&self.out.map),
+            relaxed: false,
         });
+    }
+
+    /// `#RELAX` (occ21): the rest of this `#IF` branch is indented one level deeper than the
+    /// code around it, and is read two columns to the left. Once per branch.
+    fn relax(&mut self, line: &Line, conds: &mut [Cond]) {
+        let problem = match conds.last_mut() {
+            None => Some("#RELAX outside #IF"),
+            Some(cond) if cond.relaxed => Some("#RELAX twice in one #IF branch"),
+            Some(cond) => {
+                cond.relaxed = true;
+                None
+            }
+        };
+        if let Some(message) = problem {
+            let at = line.whole(&self.out.map);
+            self.error(at, message, "here");
+        }
     }
 
     fn elif(&mut self, line: &Line, rest: &str, conds: &mut [Cond]) {
@@ -272,6 +298,7 @@ impl Preprocessor<'_> {
         if let Some(cond) = conds.last_mut() {
             cond.active = value;
             cond.taken |= value;
+            cond.relaxed = false;
         }
     }
 
@@ -280,6 +307,7 @@ impl Preprocessor<'_> {
             Some(cond) => {
                 cond.active = cond.parent && !cond.taken;
                 cond.taken = true;
+                cond.relaxed = false;
             }
             None => {
                 let at = line.whole(&self.out.map);
