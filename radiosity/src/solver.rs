@@ -42,17 +42,26 @@ pub const DENSITY_GRID: u32 = 24;
 /// surfaces' answers as close to the path-traced reference (`radiosity/REFERENCES.md`).
 pub const FULL_RAYS_POWER: f64 = 0.01;
 
-/// Shadow rays per far form factor ([`FormFactorConfig::far_rays`]) for a shot of `shot` power
-/// (channels summed) in a scene emitting `emitted`: `rays` when the shot carries at least
-/// `full_rays_power` of the emitted power, fewer in proportion below, at least one. The solver
-/// and `RAD.SHOT.RAYS` both ask this.
-pub fn far_rays(rays: u32, shot: f64, emitted: f64, full_rays_power: f64) -> u32 {
+/// Shadow rays per far form factor ([`FormFactorConfig::far_rays`]) for a shot carrying
+/// `share` of the emitted power ([`shot_share`]): `rays` when `share` is at least
+/// `full_rays_power`, fewer in proportion below, at least one. The solver and `RAD.SHOT.RAYS`
+/// both ask this.
+pub fn far_rays(rays: u32, share: f64, full_rays_power: f64) -> u32 {
     let rays = rays.max(1);
-    let full = full_rays_power * emitted;
-    if shot >= full {
+    if share >= full_rays_power {
         return rays;
     }
-    ((f64::from(rays) * shot / full).round() as u32).clamp(1, rays)
+    ((f64::from(rays) * share / full_rays_power).round() as u32).clamp(1, rays)
+}
+
+/// A shot's share of the emitted power, in the channel where it is largest: `max |shot_c| /
+/// emitted_c` over channels that emit (0 when none does). Per channel, so that a dim light of
+/// a colour no brighter light has keeps its rays: its shots carry all of that colour.
+pub fn shot_share(shot: DVec3, emitted: DVec3) -> f64 {
+    (0..3)
+        .filter(|&c| emitted[c] > 0.0)
+        .map(|c| shot[c].abs() / emitted[c])
+        .fold(0.0, f64::max)
 }
 
 /// When to stop shooting.
@@ -471,11 +480,9 @@ impl<'a> Solver<'a> {
     /// Shadow rays per far form factor ([`FormFactorConfig::far_rays`]) for a shot of `shot`
     /// power ([`far_rays`]).
     pub fn shot_rays(&self, shot: DVec3) -> u32 {
-        let emitted: f64 = self.accounts.emitted.iter().sum();
         far_rays(
             self.config.form_factor.rays,
-            shot.abs().element_sum(),
-            emitted,
+            shot_share(shot, DVec3::from(self.accounts.emitted)),
             self.config.full_rays_power,
         )
     }

@@ -23,8 +23,20 @@ fn load(name: &str, obj: &str) -> Result<Scene, SceneError> {
 /// Solves `scene` meshed at `fraction` of its diagonal until `until`, and checks that the
 /// result is finite, non-negative and balanced.
 fn solve(scene: &Scene, fraction: f32, until: Until) -> Solver<'_> {
+    solve_with(
+        scene,
+        fraction,
+        until,
+        SolverConfig::default().full_rays_power,
+    )
+}
+
+/// [`solve`] with weak shots casting all their rays from `full_rays_power` of the emitted
+/// power on (0: every shot casts them all).
+fn solve_with(scene: &Scene, fraction: f32, until: Until, full_rays_power: f64) -> Solver<'_> {
     let d = scene.diagonal();
     let config = SolverConfig {
+        full_rays_power,
         form_factor: FormFactorConfig {
             rays: 16,
             offset: d * 1e-6,
@@ -210,9 +222,12 @@ fn a_dim_emitter_is_not_lost_beside_one_1e8_brighter() {
             o.emission = Vec3::ZERO;
         }
     }
+    // Two Monte Carlo solutions whose shots come in different orders: every shot casts all its
+    // rays, since the fewer rays of weak shots add about 1% of noise to the dimmest surfaces
+    // (radiosity/REFERENCES.md), which the 2% compared here would not separate from a lost light.
     let until = Until::Error(0.01);
-    let a = by_name(&solve(&both, 0.3, until));
-    let b = by_name(&solve(&dim_only, 0.3, until));
+    let a = by_name(&solve_with(&both, 0.3, until, 0.0));
+    let b = by_name(&solve_with(&dim_only, 0.3, until, 0.0));
     for (name, x) in &a {
         let y = b[name];
         assert!(

@@ -115,7 +115,7 @@ pub static INTRINSICS: &[Intrinsic] = &[
     },
     Intrinsic {
         name: "RAD.SHOT.RAYS",
-        params: &[ValInt, ValReal64, ValReal64, ValReal64, ResultInt],
+        params: &[ValInt, ValReal64, ValReal64, ResultInt],
         result: None,
         addr: weighted::shot_rays as *const u8,
     },

@@ -615,21 +615,29 @@ fn receiver_samples_at_a_set_are_the_solvers_with_far_rays() {
 
 #[test]
 fn shot_rays_are_the_solvers() {
-    type ShotRays = unsafe extern "C" fn(Word, f64, f64, f64, *mut Word);
+    type ShotRays = unsafe extern "C" fn(Word, f64, f64, *mut Word);
     let e = entry("RAD.SHOT.RAYS");
     // SAFETY: the table says this is the signature.
     let f: ShotRays = unsafe { std::mem::transmute(e.addr) };
-    let call = |rays, shot, emitted, full| {
+    let call = |rays, share, full| {
         let mut far = 0;
         // SAFETY: a valid result address.
-        unsafe { f(rays, shot, emitted, full, &mut far) };
+        unsafe { f(rays, share, full, &mut far) };
         far
     };
-    assert_eq!(call(8, 5.0, 100.0, 0.01), 8);
-    assert_eq!(call(8, 0.5, 100.0, 0.01), 4);
-    assert_eq!(call(8, 1e-6, 100.0, 0.01), 1);
-    assert_eq!(call(8, 1e-6, 100.0, 0.0), 8);
-    assert_eq!(call(0, 1.0, 100.0, 0.01), -1);
-    assert_eq!(call(8, -1.0, 100.0, 0.01), -1);
-    assert_eq!(call(8, f64::NAN, 100.0, 0.01), -1);
+    assert_eq!(call(8, 0.05, 0.01), 8);
+    assert_eq!(call(8, 0.005, 0.01), 4);
+    assert_eq!(call(8, 1e-8, 0.01), 1);
+    assert_eq!(call(8, 1e-8, 0.0), 8);
+    assert_eq!(call(0, 0.01, 0.01), -1);
+    assert_eq!(call(8, -0.01, 0.01), -1);
+    assert_eq!(call(8, f64::NAN, 0.01), -1);
+    // The share is the largest channel's: a dim red light beside a bright green one keeps its
+    // rays for the red it alone emits.
+    use crate::solver::shot_share;
+    use glam::DVec3;
+    let emitted = DVec3::new(1.0, 1e8, 0.0);
+    assert_eq!(shot_share(DVec3::new(0.5, 0.0, 0.0), emitted), 0.5);
+    assert_eq!(shot_share(DVec3::new(0.0, -1e6, 0.0), emitted), 0.01);
+    assert_eq!(shot_share(DVec3::ONE, DVec3::ZERO), 0.0);
 }

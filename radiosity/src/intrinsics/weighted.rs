@@ -217,28 +217,22 @@ fn weighted_form_factor(
     .value
 }
 
-/// `PROC RAD.SHOT.RAYS (VAL INT rays, VAL REAL64 shot, emitted, full.power, RESULT INT far)`:
-/// the rays per far form factor of a shot of `shot` power (channels summed) in a scene emitting
-/// `emitted` (channels summed) when shots of at least `full.power` of it cast all `rays`
-/// ([`far_rays`]; the solver's `full_rays_power`, 0: always `rays`): the `far.rays` argument of
-/// `RAD.RECEIVER.SAMPLES`. `far` is -1 when `rays` is not in 1..=65536 or a power is negative
-/// or not finite.
+/// `PROC RAD.SHOT.RAYS (VAL INT rays, VAL REAL64 share, full.power, RESULT INT far)`: the
+/// rays per far form factor of a shot carrying `share` of the emitted power (in the channel
+/// where it is largest, [`shot_share`](crate::solver::shot_share)) when shots of at least
+/// `full.power` cast all `rays` ([`far_rays`]; the solver's `full_rays_power`, 0: always
+/// `rays`): the `far.rays` argument of `RAD.RECEIVER.SAMPLES`. `far` is -1 when `rays` is not
+/// in 1..=65536 or a share is negative or not finite.
 ///
 /// # Safety
 /// `far` is valid for one word (the occam ABI).
-pub unsafe extern "C" fn shot_rays(
-    rays: Word,
-    shot: f64,
-    emitted: f64,
-    full_power: f64,
-    far: *mut Word,
-) {
+pub unsafe extern "C" fn shot_rays(rays: Word, share: f64, full_power: f64, far: *mut Word) {
     let valid = (1..=MAX_SAMPLES).contains(&rays)
-        && [shot, emitted, full_power]
+        && [share, full_power]
             .iter()
             .all(|x| x.is_finite() && *x >= 0.0);
     let value = if valid {
-        far_rays(rays as u32, shot, emitted, full_power) as Word
+        far_rays(rays as u32, share, full_power) as Word
     } else {
         -1
     };
