@@ -127,23 +127,11 @@ pub unsafe extern "C" fn source_samples_weighted_at(
             &mut w,
         );
     }
-    let floats = 3 * samples.len();
-    let fits = floats as Word <= out_len && w.len() as Word <= weights_len;
-    let written = if samples.is_empty() || !fits {
+    let written = if samples.is_empty() {
         -1
     } else {
-        // SAFETY: `out` is valid for `out_len` >= `floats` floats, `weights` for `w.len()`.
-        let (out, weights) = unsafe {
-            (
-                std::slice::from_raw_parts_mut(out, floats),
-                std::slice::from_raw_parts_mut(weights, w.len()),
-            )
-        };
-        for (o, s) in out.chunks_exact_mut(3).zip(&samples) {
-            o.copy_from_slice(&s.to_array());
-        }
-        weights.copy_from_slice(&w);
-        samples.len() as Word
+        // SAFETY: the ABI passes `out` and `weights` valid for their lengths.
+        unsafe { write_samples(&samples, &w, out, out_len, weights, weights_len) }
     };
     // SAFETY: the ABI passes a valid result address.
     unsafe { *count = written };
@@ -316,24 +304,43 @@ pub unsafe extern "C" fn receiver_samples_at(
         _ => None,
     };
     let written = match drawn {
-        Some((samples, w))
-            if 3 * samples.len() as Word <= out_len && w.len() as Word <= weights_len =>
-        {
-            // SAFETY: `out` is valid for `out_len` >= 3 × samples floats, `weights` for `w.len()`.
-            let (out, weights) = unsafe {
-                (
-                    std::slice::from_raw_parts_mut(out, 3 * samples.len()),
-                    std::slice::from_raw_parts_mut(weights, w.len()),
-                )
-            };
-            for (o, s) in out.chunks_exact_mut(3).zip(&samples) {
-                o.copy_from_slice(&s.to_array());
-            }
-            weights.copy_from_slice(&w);
-            samples.len() as Word
-        }
-        _ => -1,
+        // SAFETY: the ABI passes `out` and `weights` valid for their lengths.
+        Some((samples, w)) => unsafe {
+            write_samples(&samples, &w, out, out_len, weights, weights_len)
+        },
+        None => -1,
     };
     // SAFETY: the ABI passes a valid result address.
     unsafe { *count = written };
+}
+
+/// Writes `samples` (3 floats each) to `out` and their weights `w` to `weights` and answers how
+/// many samples, or -1 (nothing written) when either array is too short.
+///
+/// # Safety
+/// `out` is valid for `out_len` floats and `weights` for `weights_len`.
+unsafe fn write_samples(
+    samples: &[Vec3],
+    w: &[f32],
+    out: *mut f32,
+    out_len: Word,
+    weights: *mut f32,
+    weights_len: Word,
+) -> Word {
+    let floats = 3 * samples.len();
+    if floats as Word > out_len || w.len() as Word > weights_len {
+        return -1;
+    }
+    // SAFETY: `out` is valid for `out_len` >= `floats` floats, `weights` for `w.len()`.
+    let (out, weights) = unsafe {
+        (
+            std::slice::from_raw_parts_mut(out, floats),
+            std::slice::from_raw_parts_mut(weights, w.len()),
+        )
+    };
+    for (o, s) in out.chunks_exact_mut(3).zip(samples) {
+        o.copy_from_slice(&s.to_array());
+    }
+    weights.copy_from_slice(w);
+    samples.len() as Word
 }
