@@ -99,7 +99,7 @@ pub fn point_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
 /// Returns the stratified sample points of a source triangle for `m` rays (a jittered
 /// `k × k` grid, `k = ceil(sqrt(m))`, warped onto the triangle by [`Tri::sample`]).
 pub fn source_samples(src: &Tri, m: u32, rng: &mut Pcg32, out: &mut Vec<Vec3>) {
-    source_samples_weighted(src, m, None, rng, out, &mut Vec::new());
+    source_samples_weighted(src, m, None::<&SourceDensity>, rng, out, &mut Vec::new());
 }
 
 /// The side `k` of the `k × k` grid of source samples taken for `m` rays: `⌈√m⌉` (at least 1).
@@ -110,10 +110,10 @@ pub fn sample_grid(m: u32) -> u32 {
 
 /// [`source_samples`], and in `weights` the source's relative unshot radiosity at each sample
 /// (`density`; all 1 when `None`, and then `weights` is left empty).
-pub fn source_samples_weighted(
+pub fn source_samples_weighted<C: AsRef<[f32]>>(
     src: &Tri,
     m: u32,
-    density: Option<&SourceDensity>,
+    density: Option<&SourceDensity<C>>,
     rng: &mut Pcg32,
     out: &mut Vec<Vec3>,
     weights: &mut Vec<f32>,
@@ -140,10 +140,13 @@ pub fn source_samples_weighted(
 /// This lets a patch shoot what each of its elements holds rather than its average: a floor
 /// patch half in a block's shadow shoots from its lit half only, which the block's face, close
 /// by, sees very differently (issue 10, cause 4). Far receivers average the same samples.
+///
+/// The cells are owned (`Vec<f32>`, as the solver tabulates them) or borrowed (`&[f32]`, as an
+/// intrinsic is passed them, [`SourceDensity::from_cells`]).
 #[derive(Clone, Debug, PartialEq)]
-pub struct SourceDensity {
+pub struct SourceDensity<C = Vec<f32>> {
     g: u32,
-    cells: Vec<f32>,
+    cells: C,
 }
 
 impl SourceDensity {
@@ -199,28 +202,30 @@ impl SourceDensity {
             parts[last.get()].1
         })
     }
+}
 
-    /// A density from its `g × g` cells as [`SourceDensity::cells`] lists them; `None` unless
-    /// there are `g²` cells for some `g ≥ 1`, each finite and non-negative.
-    pub fn from_cells(cells: &[f32]) -> Option<SourceDensity> {
+impl<'a> SourceDensity<&'a [f32]> {
+    /// A density from its `g × g` cells as [`SourceDensity::cells`] lists them, borrowed (an
+    /// intrinsic takes one per receiver); `None` unless there are `g²` cells for some `g ≥ 1`,
+    /// each finite and non-negative.
+    pub fn from_cells(cells: &'a [f32]) -> Option<Self> {
         let g = (cells.len() as f64).sqrt().round() as u32;
         let fits = g >= 1 && (g * g) as usize == cells.len();
         let valid = cells.iter().all(|c| c.is_finite() && *c >= 0.0);
-        (fits && valid).then(|| SourceDensity {
-            g,
-            cells: cells.to_vec(),
-        })
+        (fits && valid).then_some(SourceDensity { g, cells })
     }
+}
 
+impl<C: AsRef<[f32]>> SourceDensity<C> {
     /// The cells, row by row (`u` major), each the density at its centre over the mean.
     pub fn cells(&self) -> &[f32] {
-        &self.cells
+        self.cells.as_ref()
     }
 
     /// The relative density at `(u, v)` in [0,1)².
     pub fn at(&self, u: f32, v: f32) -> f32 {
         let cell = |x: f32| ((x * self.g as f32) as u32).min(self.g - 1);
-        self.cells[(cell(u) * self.g + cell(v)) as usize]
+        self.cells.as_ref()[(cell(u) * self.g + cell(v)) as usize]
     }
 }
 
@@ -262,11 +267,11 @@ pub fn receiver_rays(p: Vec3, n: Vec3, src: &Tri, config: &FormFactorConfig) -> 
 /// [`sample_grid`]`(config.rays)`, draws from its start and leaves `rng` at the next slot, so
 /// the receivers of a batch draw from one generator in order and a node holding one of them
 /// draws the same set by skipping to its slot (`RAD.RECEIVER.SAMPLES`). Returns the rays.
-pub fn receiver_samples(
+pub fn receiver_samples<C: AsRef<[f32]>>(
     (p, n): (Vec3, Vec3),
     src: &Tri,
     config: &FormFactorConfig,
-    density: Option<&SourceDensity>,
+    density: Option<&SourceDensity<C>>,
     rng: &mut Pcg32,
     out: &mut Vec<Vec3>,
     weights: &mut Vec<f32>,

@@ -586,7 +586,7 @@ fn receiver_samples_at_a_set_are_the_solvers_with_far_rays() {
             (p, n),
             &tri,
             &config,
-            None,
+            None::<&crate::formfactor::SourceDensity>,
             &mut rng,
             &mut want,
             &mut w,
