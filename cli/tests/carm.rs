@@ -133,11 +133,7 @@ fn carm_on_1_4_13_and_40_nodes_gives_one_solution() {
 
 #[test]
 fn carm_on_1_4_13_and_40_nodes_agrees_with_the_reference_solver() {
-    // The reference solver as carm.occ runs: plain progressive refinement, no ambient overshoot.
-    let reference = radiosity(
-        &scratch("carm-reference"),
-        &["--solver", "reference", "--acceleration", "off"],
-    );
+    let reference = radiosity(&scratch("carm-reference"), &["--solver", "reference"]);
     let want = means(&reference);
     for (nodes, report) in carm_runs() {
         for ((name, b), (_, r)) in means(report).iter().zip(&want) {
@@ -166,11 +162,7 @@ fn carm_walks_a_many_voxel_octree_as_the_reference_solver() {
         "--image-size",
         "16",
     ];
-    let reference = radiosity_with(
-        &scratch("carm-lamp-reference"),
-        &settings,
-        &["--acceleration", "off"],
-    );
+    let reference = radiosity_with(&scratch("carm-lamp-reference"), &settings, &[]);
     let leaves = reference["scene"]["octree"]["leaves"]
         .as_u64()
         .expect("leaves");
@@ -205,11 +197,7 @@ fn carm_stops_on_the_error_estimate_where_the_reference_solver_does() {
     let until = ["--until", "error=0.05"];
     let reference = radiosity(
         &scratch("carm-error-reference"),
-        &[
-            &["--solver", "reference", "--acceleration", "off"][..],
-            &until,
-        ]
-        .concat(),
+        &[&["--solver", "reference"][..], &until].concat(),
     );
     let carm = radiosity(
         &scratch("carm-error"),
@@ -235,6 +223,32 @@ fn carm_stops_on_the_error_estimate_where_the_reference_solver_does() {
     }
 }
 
+/// Overshooting by the ambient estimate, always on: carm.occ lends and takes back the overshoot
+/// as the reference solver does.
+#[test]
+fn carm_overshoots_by_the_ambient_estimate_as_the_reference_solver() {
+    let always = ["--acceleration", "ambient"];
+    let reference = radiosity(
+        &scratch("carm-ambient-reference"),
+        &[&["--solver", "reference"][..], &always].concat(),
+    );
+    let carm = radiosity(
+        &scratch("carm-ambient"),
+        &[
+            &["--solver", "carm", "--nodes", "4", "--threads", "1"][..],
+            &always,
+        ]
+        .concat(),
+    );
+    for ((name, b), (_, r)) in means(&carm).iter().zip(&means(&reference)) {
+        assert!(
+            apart(b, r) <= 0.01,
+            "{name}: carm {b:?} against reference {r:?} ({:.3}% apart)",
+            100.0 * apart(b, r)
+        );
+    }
+}
+
 #[test]
 fn carm_refuses_what_it_cannot_do_clearly() {
     let out = scratch("carm-refusals");
@@ -243,16 +257,6 @@ fn carm_refuses_what_it_cannot_do_clearly() {
         (
             &["--solver", "carm", "--no-adapt", "--until", "time=1"][..],
             "takes --until error=F, unshot=F or shots=N",
-        ),
-        (
-            &[
-                "--solver",
-                "carm",
-                "--no-adapt",
-                "--acceleration",
-                "ambient",
-            ][..],
-            "does not overshoot by the ambient estimate yet",
         ),
         (
             &[

@@ -82,7 +82,7 @@ fn balance_error(report: &serde_json::Value) -> f64 {
 
 /// Solves the stiff box of reflectance `rho` with carm.occ and checks every object's mean B
 /// against E / (1 - ρ) within 1%, and the energy balance within 1e-9.
-fn furnace(rho: &str, until: &str, overshoot: &str) {
+fn furnace(rho: &str, until: &str, overshoot: &str, acceleration: &str) {
     let out = scratch(&format!("carm-stiff-{rho}"));
     let report = report(
         &scene(&format!("stiff/box-{rho}.obj")),
@@ -98,6 +98,8 @@ fn furnace(rho: &str, until: &str, overshoot: &str) {
             until,
             "--overshoot",
             overshoot,
+            "--acceleration",
+            acceleration,
         ],
     );
     assert_eq!(report["solver"], "carm");
@@ -119,18 +121,21 @@ fn furnace(rho: &str, until: &str, overshoot: &str) {
 
 #[test]
 fn carm_furnace_rho_0_5_converges_to_e_over_one_minus_rho() {
-    furnace("0.5", "unshot=0.001", "1");
+    furnace("0.5", "unshot=0.001", "1", "auto");
 }
 
 #[test]
 fn carm_furnace_rho_0_9_converges_to_e_over_one_minus_rho() {
-    furnace("0.9", "unshot=0.001", "1");
+    furnace("0.9", "unshot=0.001", "1", "auto");
 }
 
 #[test]
 fn carm_furnace_rho_0_99_converges_to_e_over_one_minus_rho() {
-    // Over-relaxed by its fixed factor: 11,400 shots where plain refinement takes 33,000.
-    furnace("0.99", "unshot=0.001", "1.5");
+    // Over-relaxed by its fixed factor: 11,400 shots where plain refinement takes 33,000. Not
+    // by the ambient estimate: carm.occ does not close the form-factor rows of a convex
+    // enclosure as the reference solver does, and overshooting by an ambient term its rows do
+    // not sum to ends 3% low here (97.0 for 100 after 535 shots).
+    furnace("0.99", "unshot=0.001", "1.5", "off");
 }
 
 #[test]

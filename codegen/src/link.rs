@@ -152,6 +152,7 @@ pub fn param_kind(types: &TypeTable, mode: ParamMode, ty: &Type) -> Option<Param
             (Real32, false) => Some(ValReal32s),
             (Real32, true) => Some(VarReal32s),
             (Real64, false) => Some(ValReal64s),
+            (Real64, true) => Some(VarReal64s),
             (Bool, false) => Some(ValBools),
             (Bool, true) => Some(VarBools),
             _ => None,

@@ -321,10 +321,11 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                     args.nodes, args.until
                 ),
             );
-            if args.acceleration == Acceleration::Auto && reports {
+            if args.acceleration == Acceleration::Auto && solver.stages.close_rows && reports {
                 eprintln!(
-                    "note: carm.occ shoots without the ambient overshoot the reference solver \
-                     chooses for stiff scenes (--overshoot F sets a fixed factor)"
+                    "note: carm.occ does not close the form-factor rows of this closed convex \
+                     scene, so it does not overshoot by the ambient estimate here (--overshoot F \
+                     sets a fixed factor)"
                 );
             }
             let program = match &args.program {
@@ -602,11 +603,6 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
             "--solver carm takes --until error=F, unshot=F or shots=N"
         );
     }
-    anyhow::ensure!(
-        !matches!(args.solver, SolverKind::Carm) || args.acceleration != Acceleration::Ambient,
-        "--solver carm does not overshoot by the ambient estimate yet: give --overshoot F for a \
-         fixed factor"
-    );
     anyhow::ensure!(
         args.transport == super::transport::Kind::Inproc || matches!(args.solver, SolverKind::Carm),
         "--transport mpi spreads carm.occ's nodes: give --solver carm"

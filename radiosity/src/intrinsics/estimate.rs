@@ -1,12 +1,14 @@
 //! `RAD.ERROR.REACHED`: the stopping rule of `--until error=F` ([`crate::estimate`]) for a
 //! controller that keeps the tallies itself (carm.occ's), so that it stops where the reference
-//! solver would.
+//! solver would; `RAD.OVERSHOOT.AMBIENT`: the ambient irradiance such a controller overshoots
+//! by ([`crate::overshoot`]), when it does.
 
 use glam::DVec3;
 use occ_runtime::abi::Word;
 
 use super::array;
 use crate::estimate::{Tally, object_error, reached};
+use crate::overshoot::Acceleration;
 
 /// REAL64s per object in `RAD.ERROR.REACHED`'s `objects`: area, mean radiosity without the
 /// ambient term (RGB), reflectance (RGB).
@@ -37,18 +39,25 @@ pub unsafe extern "C" fn error_reached(
     unsafe { *verdict = judge(objects, tally, target) };
 }
 
-fn judge(objects: &[f64], tally: &[f64], target: f64) -> Word {
-    if !objects.len().is_multiple_of(OBJECT_REALS) || tally.len() != TALLY_REALS {
-        return -1;
+/// The [`Tally`] laid out as [`TALLY_REALS`] REAL64s, or `None` for another length.
+fn tally_of(reals: &[f64]) -> Option<Tally> {
+    if reals.len() != TALLY_REALS {
+        return None;
     }
-    let rgb = |at: usize| DVec3::from_slice(&tally[at..at + 3]);
-    let tally = Tally {
-        total_area: tally[0],
+    let rgb = |at: usize| DVec3::from_slice(&reals[at..at + 3]);
+    Some(Tally {
+        total_area: reals[0],
         rho_avg: rgb(1),
         unshot: rgb(4),
         shot: rgb(7),
         received: rgb(10),
         absorbed: rgb(13),
+    })
+}
+
+fn judge(objects: &[f64], tally: &[f64], target: f64) -> Word {
+    let Some(tally) = tally_of(tally).filter(|_| objects.len().is_multiple_of(OBJECT_REALS)) else {
+        return -1;
     };
     let ambient = tally.ambient();
     let errors = objects.chunks_exact(OBJECT_REALS).map(|o| {
@@ -60,6 +69,50 @@ fn judge(objects: &[f64], tally: &[f64], target: f64) -> Word {
         )
     });
     Word::from(reached(errors, target))
+}
+
+/// `PROC RAD.OVERSHOOT.AMBIENT (VAL []REAL64 tally, VAL INT acceleration, []REAL64 ambient,
+/// RESULT INT active)`: whether a solve with these tallies ([`TALLY_REALS`] REAL64s as for
+/// `RAD.ERROR.REACHED`, but the unshot power summed with its signs) overshoots its next shot
+/// under `acceleration` (0 off, 1 always, 2 auto: while the scene is stiff), as
+/// [`Acceleration::active`] decides, and by which ambient irradiance (RGB, written to
+/// `ambient` when active): the reference solver's. `active` is 1 or 0, or -1 (nothing written)
+/// for a wrong length or mode.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `active` for one word (the occam ABI).
+pub unsafe extern "C" fn overshoot_ambient(
+    tally: *const f64,
+    tally_len: Word,
+    acceleration: Word,
+    ambient: *mut f64,
+    ambient_len: Word,
+    active: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let tally = unsafe { array(tally, tally_len) };
+    let mode = match acceleration {
+        0 => Some(Acceleration::Off),
+        1 => Some(Acceleration::Ambient),
+        2 => Some(Acceleration::Auto),
+        _ => None,
+    };
+    let verdict = match (tally_of(tally), mode) {
+        (Some(t), Some(mode)) if ambient_len >= 3 => {
+            let (c, r) = t.closure();
+            if mode.active(c * r) {
+                // SAFETY: `ambient` is valid for `ambient_len` >= 3 REAL64s.
+                let out = unsafe { std::slice::from_raw_parts_mut(ambient, 3) };
+                out.copy_from_slice(&t.ambient().as_dvec3().to_array());
+                1
+            } else {
+                0
+            }
+        }
+        _ => -1,
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *active = verdict };
 }
 
 #[cfg(test)]

@@ -169,6 +169,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         result: None,
         addr: estimate::error_reached as *const u8,
     },
+    Intrinsic {
+        name: "RAD.OVERSHOOT.AMBIENT",
+        params: &[ValReal64s, ValInt, VarReal64s, ResultInt],
+        result: None,
+        addr: estimate::overshoot_ambient as *const u8,
+    },
 ];
 
 /// Floats per ray written by `RAD.SHADOW.RAYS`: origin (3), direction (3), tmin, tmax (the

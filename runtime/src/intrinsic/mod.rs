@@ -48,6 +48,8 @@ pub enum ParamKind {
     VarBytes,
     /// `VAL []REAL64`: address and length.
     ValReal64s,
+    /// `[]REAL64` (written): address and length.
+    VarReal64s,
     /// `RESULT INT` or `INT` (written): address of a word.
     ResultInt,
     /// `VAL []INT`: address of `i32` elements and length.
@@ -95,6 +97,7 @@ impl ParamKind {
             ParamKind::ValBytes
             | ParamKind::VarBytes
             | ParamKind::ValReal64s
+            | ParamKind::VarReal64s
             | ParamKind::ValInts
             | ParamKind::VarInts
             | ParamKind::ValReal32s
@@ -112,6 +115,7 @@ impl ParamKind {
             ParamKind::VarBytes
                 | ParamKind::VarInts
                 | ParamKind::VarReal32s
+                | ParamKind::VarReal64s
                 | ParamKind::VarBools
                 | ParamKind::ResultInt
                 | ParamKind::ResultReal32
@@ -135,6 +139,7 @@ impl ParamKind {
             ParamKind::ValBytes => "VAL []BYTE",
             ParamKind::VarBytes => "[]BYTE",
             ParamKind::ValReal64s => "VAL []REAL64",
+            ParamKind::VarReal64s => "[]REAL64",
             ParamKind::ResultInt => "RESULT INT",
             ParamKind::ValInts => "VAL []INT",
             ParamKind::VarInts => "[]INT",
