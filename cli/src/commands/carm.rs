@@ -269,7 +269,7 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     w.int(match config.acceleration {
         Acceleration::Off => 0,
         Acceleration::Ambient => 1,
-        Acceleration::Auto if solver.stages.close_rows => 0,
+        Acceleration::Auto if solver.analysis.closed => 0,
         Acceleration::Auto => 2,
     });
     let mut object_area = vec![0.0f64; scene.objects.len()];

@@ -10,6 +10,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
+use occ_radiosity::analysis::Stages;
 use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::mesh::{Mesh, MeshConfig};
 use occ_radiosity::output::compare;
@@ -275,7 +276,16 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         solver_config(&args, diag, mesh_config.element_size),
     );
     let octree_time = t2.elapsed().as_secs_f64();
-    print_stages(&solver);
+    if let SolverKind::Carm = args.solver {
+        // carm.occ's stages: it always casts shadow rays and does not close form-factor rows.
+        solver.stages = Stages {
+            shadow_rays: true,
+            close_rows: false,
+        };
+    }
+    if reports {
+        print_stages(&solver);
+    }
     if let Some(path) = &args.reference {
         let text = read(path)?;
         let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
@@ -321,7 +331,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                     args.nodes, args.until
                 ),
             );
-            if args.acceleration == Acceleration::Auto && solver.stages.close_rows && reports {
+            if args.acceleration == Acceleration::Auto && solver.analysis.closed && reports {
                 eprintln!(
                     "note: carm.occ does not close the form-factor rows of this closed convex \
                      scene, so it does not overshoot by the ambient estimate here (--overshoot F \
