@@ -76,6 +76,30 @@ fn apart(b: &[f64; 3], r: &[f64; 3]) -> f64 {
     if size > 0.0 { diff / size } else { diff }
 }
 
+/// carm.occ on 4 nodes (`--threads 1`) and the reference solver, both with `extra`, into
+/// scratch folders named after `name`; returns their reports (carm's first).
+fn carm_and_reference(name: &str, extra: &[&str]) -> (serde_json::Value, serde_json::Value) {
+    let carm_flags = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
+    let carm = radiosity(&scratch(name), &[&carm_flags[..], extra].concat());
+    let reference = radiosity(
+        &scratch(&format!("{name}-reference")),
+        &[&["--solver", "reference"][..], extra].concat(),
+    );
+    (carm, reference)
+}
+
+/// Every object's mean radiosity in carm's report within 1% of the reference's (`what` names
+/// the run in a failure).
+fn assert_agree(carm: &serde_json::Value, reference: &serde_json::Value, what: &str) {
+    for ((name, b), (_, r)) in means(carm).iter().zip(&means(reference)) {
+        assert!(
+            apart(b, r) <= 0.01,
+            "{what}{name}: carm {b:?} against reference {r:?} ({:.3}% apart)",
+            100.0 * apart(b, r)
+        );
+    }
+}
+
 /// carm.occ's reports on 1, 4, 13 and 40 nodes (run once for all the tests of this file).
 fn carm_runs() -> &'static [(&'static str, serde_json::Value)] {
     static RUNS: OnceLock<Vec<(&'static str, serde_json::Value)>> = OnceLock::new();
@@ -134,15 +158,8 @@ fn carm_on_1_4_13_and_40_nodes_gives_one_solution() {
 #[test]
 fn carm_on_1_4_13_and_40_nodes_agrees_with_the_reference_solver() {
     let reference = radiosity(&scratch("carm-reference"), &["--solver", "reference"]);
-    let want = means(&reference);
     for (nodes, report) in carm_runs() {
-        for ((name, b), (_, r)) in means(report).iter().zip(&want) {
-            assert!(
-                apart(b, r) <= 0.01,
-                "{nodes} nodes: {name}: carm {b:?} against reference {r:?} ({:.3}% apart)",
-                100.0 * apart(b, r)
-            );
-        }
+        assert_agree(report, &reference, &format!("{nodes} nodes: "));
     }
 }
 
@@ -183,30 +200,12 @@ fn carm_walks_a_many_voxel_octree_as_the_reference_solver() {
         assert_eq!(node["voxels"], carm["nodes"][0]["voxels"]);
         assert_eq!(node["voxel_bytes"], carm["nodes"][0]["voxel_bytes"]);
     }
-    for ((name, b), (_, r)) in means(&carm).iter().zip(&means(&reference)) {
-        assert!(
-            apart(b, r) <= 0.01,
-            "{name}: carm {b:?} against reference {r:?} ({:.3}% apart)",
-            100.0 * apart(b, r)
-        );
-    }
+    assert_agree(&carm, &reference, "");
 }
 
 #[test]
 fn carm_stops_on_the_error_estimate_where_the_reference_solver_does() {
-    let until = ["--until", "error=0.05"];
-    let reference = radiosity(
-        &scratch("carm-error-reference"),
-        &[&["--solver", "reference"][..], &until].concat(),
-    );
-    let carm = radiosity(
-        &scratch("carm-error"),
-        &[
-            &["--solver", "carm", "--nodes", "4", "--threads", "1"][..],
-            &until,
-        ]
-        .concat(),
-    );
+    let (carm, reference) = carm_and_reference("carm-error", &["--until", "error=0.05"]);
     let left = |r: &serde_json::Value| r["totals"]["unshot_fraction"].as_f64().expect("a number");
     // The same shots: the same power left, up to the order of the sums of received power
     // (parts in 1e8 here; one shot more or less would move it by parts in 100).
@@ -218,35 +217,15 @@ fn carm_stops_on_the_error_estimate_where_the_reference_solver_does() {
     );
     // Stopped on the estimate, with power still unshot.
     assert!(left(&reference) > 0.0);
-    for ((name, b), (_, r)) in means(&carm).iter().zip(&means(&reference)) {
-        assert!(apart(b, r) <= 0.01, "{name}: carm {b:?} against {r:?}");
-    }
+    assert_agree(&carm, &reference, "");
 }
 
 /// Overshooting by the ambient estimate, always on: carm.occ lends and takes back the overshoot
 /// as the reference solver does.
 #[test]
 fn carm_overshoots_by_the_ambient_estimate_as_the_reference_solver() {
-    let always = ["--acceleration", "ambient"];
-    let reference = radiosity(
-        &scratch("carm-ambient-reference"),
-        &[&["--solver", "reference"][..], &always].concat(),
-    );
-    let carm = radiosity(
-        &scratch("carm-ambient"),
-        &[
-            &["--solver", "carm", "--nodes", "4", "--threads", "1"][..],
-            &always,
-        ]
-        .concat(),
-    );
-    for ((name, b), (_, r)) in means(&carm).iter().zip(&means(&reference)) {
-        assert!(
-            apart(b, r) <= 0.01,
-            "{name}: carm {b:?} against reference {r:?} ({:.3}% apart)",
-            100.0 * apart(b, r)
-        );
-    }
+    let (carm, reference) = carm_and_reference("carm-ambient", &["--acceleration", "ambient"]);
+    assert_agree(&carm, &reference, "");
 }
 
 #[test]

@@ -20,13 +20,10 @@ use glam::Vec3;
 use occ_runtime::abi::Word;
 use occ_runtime::intrinsic::{Intrinsic, ParamKind::*};
 
-use crate::formfactor::{
-    FormFactorConfig, form_factor_with, point_polygon, sample_grid, source_samples,
-};
+use crate::formfactor::{FormFactorConfig, form_factor_with, point_polygon};
 use crate::geom::Tri;
 use crate::octree::VOXEL_TRI_FLOATS;
 use crate::packet::{LANES, RayQuery, TriPacket};
-use crate::rng::Pcg32;
 
 /// Most rays `RAD.SOURCE.SAMPLES` accepts.
 pub const MAX_SAMPLES: Word = 1 << 16;
@@ -289,30 +286,24 @@ pub unsafe extern "C" fn source_samples_at(
     out_len: Word,
     count: *mut Word,
 ) {
-    // SAFETY: the ABI passes a valid array.
-    let tri = triangle(unsafe { array(tri, tri_len) });
-    let mut samples = Vec::new();
-    let valid = (1..=MAX_SAMPLES).contains(&m) && (0..=MAX_SKIPPED_SETS).contains(&set);
-    if let Some(tri) = tri.filter(|_| valid) {
-        let mut rng = Pcg32::new(seed as u64, SAMPLE_STREAM);
-        // Each set draws two numbers per sample of a k x k grid (`source_samples`).
-        let k = u64::from(sample_grid(m as u32));
-        rng.advance(set as u64 * 2 * k * k);
-        source_samples(&tri, m as u32, &mut rng, &mut samples);
+    // The weighted sampler with a uniform source (no grid) draws the same points and no weights.
+    // SAFETY: the caller's contract is this one's; the empty arrays are never read or written.
+    unsafe {
+        weighted::source_samples_weighted_at(
+            tri,
+            tri_len,
+            m,
+            seed,
+            set,
+            std::ptr::null(),
+            0,
+            out,
+            out_len,
+            std::ptr::null_mut(),
+            0,
+            count,
+        )
     }
-    let floats = 3 * samples.len();
-    let written = if samples.is_empty() || floats as Word > out_len {
-        -1
-    } else {
-        // SAFETY: `out` is valid for `out_len` ≥ `floats` floats.
-        let out = unsafe { std::slice::from_raw_parts_mut(out, floats) };
-        for (o, s) in out.chunks_exact_mut(3).zip(&samples) {
-            o.copy_from_slice(&s.to_array());
-        }
-        samples.len() as Word
-    };
-    // SAFETY: the ABI passes a valid result address.
-    unsafe { *count = written };
 }
 
 /// `PROC RAD.FORM.FACTOR (VAL []REAL32 point, normal, VAL []REAL32 tri, VAL []REAL32 samples,

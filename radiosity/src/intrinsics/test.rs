@@ -1,6 +1,8 @@
 //! The intrinsics called through their table addresses, as the code generator calls them.
 
 use super::*;
+use crate::formfactor::source_samples;
+use crate::rng::Pcg32;
 
 type PointPolygon =
     unsafe extern "C" fn(*const f32, Word, *const f32, Word, *const f32, Word, *mut f32);

@@ -331,16 +331,14 @@ unsafe fn write_samples(
     if floats as Word > out_len || w.len() as Word > weights_len {
         return -1;
     }
-    // SAFETY: `out` is valid for `out_len` >= `floats` floats, `weights` for `w.len()`.
-    let (out, weights) = unsafe {
-        (
-            std::slice::from_raw_parts_mut(out, floats),
-            std::slice::from_raw_parts_mut(weights, w.len()),
-        )
-    };
+    // SAFETY: `out` is valid for `out_len` >= `floats` floats.
+    let out = unsafe { std::slice::from_raw_parts_mut(out, floats) };
     for (o, s) in out.chunks_exact_mut(3).zip(samples) {
         o.copy_from_slice(&s.to_array());
     }
-    weights.copy_from_slice(w);
+    if !w.is_empty() {
+        // SAFETY: `weights` is valid for `weights_len` >= `w.len()` floats.
+        unsafe { std::slice::from_raw_parts_mut(weights, w.len()) }.copy_from_slice(w);
+    }
     samples.len() as Word
 }
