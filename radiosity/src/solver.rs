@@ -42,6 +42,17 @@ pub const DENSITY_GRID: u32 = 24;
 /// surfaces' answers as close to the path-traced reference (`radiosity/REFERENCES.md`).
 pub const FULL_RAYS_POWER: f64 = 0.01;
 
+/// Receivers per batch of a shot: each batch draws its receivers' samples from one generator.
+pub const RECEIVER_BATCH: usize = 256;
+
+/// The seed of the generator that receiver `i` of a shot from `seed` draws its samples from,
+/// and its place in that generator's batch (the set of samples it takes): the solver's batches
+/// and a node program's receivers, wherever they are, draw the same samples.
+pub fn receiver_seed(seed: u64, i: usize) -> (u64, usize) {
+    let batch = (i / RECEIVER_BATCH) as u64;
+    (seed.wrapping_add(batch * 7919), i % RECEIVER_BATCH)
+}
+
 /// Shadow rays per far form factor ([`FormFactorConfig::far_rays`]) for a shot carrying
 /// `share` of the emitted power ([`shot_share`]): `rays` when `share` is at least
 /// `full_rays_power`, fewer in proportion below, at least one. The solver and `RAD.SHOT.RAYS`
@@ -532,7 +543,7 @@ impl<'a> Solver<'a> {
         let seed = self.config.seed ^ (self.stats.shots << 20) ^ src as u64;
         let octree = self.stages.shadow_rays.then_some(&self.octree);
         let chunks: Vec<(Vec<f32>, crate::kernels::BatchStats)> = points
-            .par_chunks(256)
+            .par_chunks(RECEIVER_BATCH)
             .enumerate()
             .map(|(i, chunk)| {
                 let mut out = vec![0.0; chunk.len()];
@@ -542,7 +553,7 @@ impl<'a> Solver<'a> {
                     density,
                     chunk,
                     config,
-                    seed.wrapping_add(i as u64 * 7919),
+                    receiver_seed(seed, i * RECEIVER_BATCH).0,
                     &mut out,
                 );
                 (out, stats)

@@ -172,6 +172,33 @@ pub static INTRINSICS: &[Intrinsic] = &[
         result: None,
         addr: estimate::overshoot_ambient as *const u8,
     },
+    Intrinsic {
+        name: "RAD.RECEIVERS.RAYS",
+        params: &[
+            ValReal32s, ValInts, ValReal32s, ValInt, ValInt, ValInt, ValReal32s, ValReal32,
+            VarInts, VarReal32s, VarReal32s, VarReal32s, VarBools, VarInts, ResultInt, ResultInt,
+        ],
+        result: None,
+        addr: batch::receivers_rays as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.RECEIVERS.FORM.FACTORS",
+        params: &[
+            ValReal32s, ValReal32s, ValInts, ValReal32s, ValReal32s, ValBools, VarReal32s,
+            ResultInt,
+        ],
+        result: None,
+        addr: batch::receivers_form_factors as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.CORNERS.RECEIVE",
+        params: &[
+            ValInts, ValInts, ValReal64s, ValReal32s, ValReal32s, ValReal32s, VarReal64s,
+            VarReal64s, ResultInt,
+        ],
+        result: None,
+        addr: batch::corners_receive as *const u8,
+    },
 ];
 
 /// Floats per ray written by `RAD.SHADOW.RAYS`: origin (3), direction (3), tmin, tmax (the
@@ -189,6 +216,20 @@ unsafe fn array<'a, T>(p: *const T, n: Word) -> &'a [T] {
     }
     // SAFETY: caller contract.
     unsafe { std::slice::from_raw_parts(p, n as usize) }
+}
+
+/// Views a written occam array passed by address and length (empty when the length is not
+/// positive or the address is null).
+///
+/// # Safety
+/// When `n > 0` and `p` is not null, `p` is valid for writing `n` elements for `'a`, and no
+/// other view of them is alive.
+unsafe fn array_mut<'a, T>(p: *mut T, n: Word) -> &'a mut [T] {
+    if n <= 0 || p.is_null() {
+        return &mut [];
+    }
+    // SAFETY: caller contract.
+    unsafe { std::slice::from_raw_parts_mut(p, n as usize) }
 }
 
 /// Reads the points of a flat `x, y, z` array (`None` unless its length is a multiple of 3).
@@ -488,7 +529,8 @@ fn receiver_rays(
             ray[7] = tmax;
             cast += 1;
         }
-        false
+        // Every ray counts as blocked, so no value is computed: only the rays are wanted.
+        true
     });
     cast
 }
@@ -612,6 +654,7 @@ pub unsafe extern "C" fn shadow_rays_batch(
     unsafe { *count = written };
 }
 
+mod batch;
 pub mod estimate;
 #[cfg(test)]
 mod test;

@@ -4,22 +4,8 @@
 use glam::Vec3;
 use occ_runtime::abi::Word;
 
-use super::{array, point};
+use super::{array, array_mut, point};
 use crate::octree::flat::FlatView;
-
-/// Views a written occam array passed by address and length (empty when the length is not
-/// positive or the address is null).
-///
-/// # Safety
-/// When `n > 0` and `p` is not null, `p` is valid for writing `n` elements for `'a`, and no
-/// other view of them is alive.
-unsafe fn array_mut<'a, T>(p: *mut T, n: Word) -> &'a mut [T] {
-    if n <= 0 || p.is_null() {
-        return &mut [];
-    }
-    // SAFETY: caller contract.
-    unsafe { std::slice::from_raw_parts_mut(p, n as usize) }
-}
 
 /// `PROC RAD.RAYS.WALK (VAL []INT tree, VAL []REAL32 frame, VAL []INT slot,
 /// VAL []REAL32 pool, VAL []REAL32 rays, []BOOL blocked, []INT cursor, []INT missing,

@@ -1,0 +1,806 @@
+//! A shot's form factors for a batch of receivers in two calls around one walk, the way a node
+//! program drives them cheaply: `RAD.RECEIVERS.RAYS` draws every receiver's source samples and
+//! writes their shadow rays, the program walks all the rays through the octree at once
+//! (`RAD.RAYS.WALK`, fetching what it lacks), and `RAD.RECEIVERS.FORM.FACTORS` turns the answers
+//! into one form factor per receiver. Each receiver gets exactly what the per-receiver
+//! intrinsics (`RAD.RECEIVER.SAMPLES`, `RAD.SHADOW.RAYS.LIFTED`, `RAD.FORM.FACTOR.WEIGHTED`)
+//! and the Rust solver give it; the batch only saves the calls, and checks the shot's arrays
+//! (the density grid above all) once instead of once a receiver.
+
+use glam::Vec3;
+use occ_runtime::abi::Word;
+
+use super::{MAX_SAMPLES, RAY_FLOATS, SAMPLE_STREAM, array, array_mut, receiver_rays, triangle};
+use crate::formfactor::{
+    FormFactorConfig, SourceDensity, form_factor_weighted, receiver_samples, sample_grid,
+};
+use crate::geom::Tri;
+use crate::octree::flat::{CURSOR_INTS, START};
+use crate::rng::Pcg32;
+use crate::solver::receiver_seed;
+
+/// Floats per receiver in the `points` array: position, normal, evaluation point (the layout
+/// of a node's sample points in carm.occ).
+pub const RECEIVER_FLOATS: usize = 9;
+
+/// A receiver of the batch: its normal and the point its form factors are evaluated at.
+fn receiver(floats: &[f32]) -> (Vec3, Vec3) {
+    (
+        Vec3::from_slice(&floats[6..9]),
+        Vec3::from_slice(&floats[3..6]),
+    )
+}
+
+/// The written arrays of `RAD.RECEIVERS.RAYS`.
+struct RaysOut<'a> {
+    first: &'a mut [i32],
+    samples: &'a mut [f32],
+    weights: &'a mut [f32],
+    rays: &'a mut [f32],
+    blocked: &'a mut [u8],
+    cursor: &'a mut [i32],
+}
+
+/// The settings of a shot that every receiver of `RAD.RECEIVERS.RAYS` shares.
+struct Shot<'a> {
+    tri: Tri,
+    config: FormFactorConfig,
+    density: Option<SourceDensity<&'a [f32]>>,
+    seed: u64,
+}
+
+/// `PROC RAD.RECEIVERS.RAYS (VAL []REAL32 points, VAL []INT global, VAL []REAL32 tri,
+/// VAL INT rays, far.rays, VAL INT64 seed, VAL []REAL32 grid, VAL REAL32 offset, []INT first,
+/// []REAL32 samples, weights, shadow, []BOOL blocked, []INT cursor, RESULT INT taken, cast)`:
+/// the shadow rays of a shot from the source `tri` to r receivers (`points`: 9r floats,
+/// position, normal and evaluation point each; `global`: r INTs, each receiver's index among
+/// the scene's sample points, which picks its samples as the Rust solver's batches do from the
+/// shot's `seed`). Receiver i's samples (3 floats each, drawn as `RAD.RECEIVER.SAMPLES` draws
+/// them with `rays`, `far.rays` and the density `grid`) go to `samples`, their weights (one
+/// float each, only when `grid` holds a density) to `weights`, their rays (8 floats each, lifted
+/// by `offset` as `RAD.SHADOW.RAYS.LIFTED` writes them) to `shadow`, all from sample `first[i]`
+/// to `first[i + 1]`; `blocked` is cleared and `cursor` set to start for each ray, ready for
+/// `RAD.RAYS.WALK` over `[shadow FROM 0 FOR 8 * first[taken]]`.
+///
+/// Receivers are taken in order while their samples fit the arrays: `taken` receivers were
+/// done (`first` needs `taken + 1` INTs), `cast` is the number of rays they cast. `taken` is
+/// -1 (and `cast` 0) when an array's length is wrong (`points` not 9 floats per `global` INT,
+/// `tri` not 9, `grid` neither empty nor a density), a setting is out of range (`rays` not in
+/// 1..=65536, `far.rays` not in 0..=`rays`, `offset` negative or not finite, a global index
+/// negative), or the first receiver does not fit.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `taken`, `cast` for one word each (the occam
+/// ABI); the written arrays do not overlap.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn receivers_rays(
+    points: *const f32,
+    points_len: Word,
+    global: *const i32,
+    global_len: Word,
+    tri: *const f32,
+    tri_len: Word,
+    rays: Word,
+    far: Word,
+    seed: Word,
+    grid: *const f32,
+    grid_len: Word,
+    offset: f32,
+    first: *mut i32,
+    first_len: Word,
+    samples: *mut f32,
+    samples_len: Word,
+    weights: *mut f32,
+    weights_len: Word,
+    shadow: *mut f32,
+    shadow_len: Word,
+    blocked: *mut u8,
+    blocked_len: Word,
+    cursor: *mut i32,
+    cursor_len: Word,
+    taken: *mut Word,
+    cast: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays; occam's usage rules keep the written ones apart.
+    let (points, global, tri, grid, mut out) = unsafe {
+        (
+            array(points, points_len),
+            array(global, global_len),
+            triangle(array(tri, tri_len)),
+            array(grid, grid_len),
+            RaysOut {
+                first: array_mut(first, first_len),
+                samples: array_mut(samples, samples_len),
+                weights: array_mut(weights, weights_len),
+                rays: array_mut(shadow, shadow_len),
+                blocked: array_mut(blocked, blocked_len),
+                cursor: array_mut(cursor, cursor_len),
+            },
+        )
+    };
+    let density = SourceDensity::from_cells(grid);
+    let valid = (1..=MAX_SAMPLES).contains(&rays)
+        && (0..=rays).contains(&far)
+        && offset.is_finite()
+        && offset >= 0.0
+        && points.len() == RECEIVER_FLOATS * global.len()
+        && global.iter().all(|&g| g >= 0)
+        && (grid.is_empty() || density.is_some());
+    let shot = tri.filter(|_| valid).map(|tri| Shot {
+        tri,
+        config: FormFactorConfig {
+            rays: rays as u32,
+            far_rays: far as u32,
+            offset,
+            ..FormFactorConfig::default()
+        },
+        density,
+        seed: seed as u64,
+    });
+    let (done, rays_cast) = match shot {
+        Some(shot) => fill_rays(&shot, points, global, &mut out),
+        None => (-1, 0),
+    };
+    // SAFETY: the ABI passes valid result addresses.
+    unsafe {
+        *taken = done;
+        *cast = rays_cast;
+    }
+}
+
+/// Draws the receivers' samples and rays into `out` while they fit; answers the receivers
+/// taken (-1 when not even the first fits) and the rays cast.
+fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> (Word, Word) {
+    let (mut samples, mut weights) = (Vec::new(), Vec::new());
+    let weighted = shot.density.is_some();
+    let skip = 2 * u64::from(sample_grid(shot.config.rays)).pow(2);
+    let (mut at, mut cast, mut taken) = (0usize, 0, 0);
+    let room = |at: usize, m: usize, out: &RaysOut| {
+        let end = at + m;
+        3 * end <= out.samples.len()
+            && (!weighted || end <= out.weights.len())
+            && RAY_FLOATS * end <= out.rays.len()
+            && end <= out.blocked.len()
+            && CURSOR_INTS * end <= out.cursor.len()
+    };
+    for (floats, &g) in points.chunks_exact(RECEIVER_FLOATS).zip(global) {
+        if taken + 2 > out.first.len() {
+            break;
+        }
+        let (p, n) = receiver(floats);
+        let (seed, set) = receiver_seed(shot.seed, g as usize);
+        let mut rng = Pcg32::new(seed, SAMPLE_STREAM);
+        rng.advance(set as u64 * skip);
+        let density = shot.density.as_ref();
+        receiver_samples(
+            (p, n),
+            &shot.tri,
+            &shot.config,
+            density,
+            &mut rng,
+            &mut samples,
+            &mut weights,
+        );
+        let m = samples.len();
+        if !room(at, m, out) {
+            break;
+        }
+        out.first[taken] = at as i32;
+        for (k, s) in samples.iter().take(m).enumerate() {
+            out.samples[3 * (at + k)..3 * (at + k + 1)].copy_from_slice(&s.to_array());
+        }
+        if weighted {
+            out.weights[at..at + m].copy_from_slice(&weights[..m]);
+        }
+        if m > 0 {
+            let ray_floats = &mut out.rays[RAY_FLOATS * at..RAY_FLOATS * (at + m)];
+            cast += receiver_rays(p, n, &shot.tri, &samples[..m], &shot.config, ray_floats);
+        }
+        out.blocked[at..at + m].fill(0);
+        for c in out.cursor[CURSOR_INTS * at..CURSOR_INTS * (at + m)].chunks_exact_mut(CURSOR_INTS)
+        {
+            c[0] = START;
+        }
+        at += m;
+        taken += 1;
+    }
+    if taken == 0 && !global.is_empty() {
+        return (-1, 0);
+    }
+    if let Some(end) = out.first.get_mut(taken) {
+        *end = at as i32;
+    }
+    (taken as Word, cast)
+}
+
+/// `PROC RAD.RECEIVERS.FORM.FACTORS (VAL []REAL32 points, VAL []REAL32 tri, VAL []INT first,
+/// VAL []REAL32 samples, weights, VAL []BOOL blocked, []REAL32 f, RESULT INT count)`: the form
+/// factors from the source `tri` to the r receivers `RAD.RECEIVERS.RAYS` took (`points`: their
+/// 9r floats; `first`: its r + 1 INTs), given which of their rays `RAD.RAYS.WALK` found blocked:
+/// receiver i's form factor, from its samples `first[i]` to `first[i + 1]` weighted by `weights`
+/// (empty for a uniform source), goes to `f[i]` (0 for a receiver with no samples), exactly as
+/// `RAD.FORM.FACTOR.WEIGHTED` computes it. `count` is r, or -1 (and `f` untouched) when a
+/// length is wrong: `points` not 9r floats, `tri` not 9, `first` not ascending from 0 within
+/// `samples` (3 floats each), `weights` neither empty nor as long as the samples, `blocked`
+/// shorter than them, or `f` shorter than r.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn receivers_form_factors(
+    points: *const f32,
+    points_len: Word,
+    tri: *const f32,
+    tri_len: Word,
+    first: *const i32,
+    first_len: Word,
+    samples: *const f32,
+    samples_len: Word,
+    weights: *const f32,
+    weights_len: Word,
+    blocked: *const u8,
+    blocked_len: Word,
+    f: *mut f32,
+    f_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (points, tri, first, samples, weights, blocked, f) = unsafe {
+        (
+            array(points, points_len),
+            triangle(array(tri, tri_len)),
+            array(first, first_len),
+            array(samples, samples_len),
+            array(weights, weights_len),
+            array(blocked, blocked_len),
+            array_mut(f, f_len),
+        )
+    };
+    let r = first.len().saturating_sub(1);
+    let end = first.last().map_or(0, |&e| e.max(0) as usize);
+    let valid = !first.is_empty()
+        && first[0] == 0
+        && first.windows(2).all(|w| w[0] <= w[1])
+        && points.len() == RECEIVER_FLOATS * r
+        && 3 * end <= samples.len()
+        && (weights.is_empty() || end <= weights.len())
+        && end <= blocked.len()
+        && r <= f.len();
+    let written = match tri.filter(|_| valid) {
+        Some(tri) => {
+            let config = FormFactorConfig::default();
+            let each = points.chunks_exact(RECEIVER_FLOATS).zip(first.windows(2));
+            for ((floats, span), o) in each.zip(f.iter_mut()) {
+                let (a, b) = (span[0] as usize, span[1] as usize);
+                *o = if a == b {
+                    0.0
+                } else {
+                    let (p, n) = receiver(floats);
+                    let s: Vec<Vec3> = samples[3 * a..3 * b]
+                        .chunks_exact(3)
+                        .map(Vec3::from_slice)
+                        .collect();
+                    let w = if weights.is_empty() {
+                        &[][..]
+                    } else {
+                        &weights[a..b]
+                    };
+                    let seen = &blocked[a..b];
+                    form_factor_weighted(p, n, &tri, &s, w, &config, |k, _, _, _| seen[k] != 0)
+                        .value
+                };
+            }
+            r as Word
+        }
+        None => -1,
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
+/// `PROC RAD.CORNERS.RECEIVE (VAL []INT point, patch, VAL []REAL64 weight, VAL []REAL32 factor,
+/// VAL []REAL32 db, rho, []REAL64 received, unshot, RESULT INT count)`: books a shot of `db`
+/// (RGB radiosity) at the n element corners a node holds. Corner c sits at sample point
+/// `point[c]`, whose form factor to the source is `factor[point[c]]`, belongs to patch
+/// `patch[c]` and weighs `weight[c]` (a third of its element's area): the power
+/// `db · factor · weight` is added to the patch's `received` (3 REAL64s a patch) and, times the
+/// patch's reflectance `rho` (3 REAL32s a patch), to the corner's `unshot` (3 REAL64s a corner).
+/// Corners whose factor is 0 are skipped. `count` is n, or -1 (nothing written) when the corner
+/// arrays differ in length, `unshot` is not 3n, `db` not 3, `rho` and `received` not the same
+/// multiple of 3, or an index is out of range.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI); the
+/// written arrays do not overlap.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn corners_receive(
+    point: *const i32,
+    point_len: Word,
+    patch: *const i32,
+    patch_len: Word,
+    weight: *const f64,
+    weight_len: Word,
+    factor: *const f32,
+    factor_len: Word,
+    db: *const f32,
+    db_len: Word,
+    rho: *const f32,
+    rho_len: Word,
+    received: *mut f64,
+    received_len: Word,
+    unshot: *mut f64,
+    unshot_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays; occam's usage rules keep the written ones apart.
+    let (point, patch, weight, factor, db, rho, received, unshot) = unsafe {
+        (
+            array(point, point_len),
+            array(patch, patch_len),
+            array(weight, weight_len),
+            array(factor, factor_len),
+            array(db, db_len),
+            array(rho, rho_len),
+            array_mut(received, received_len),
+            array_mut(unshot, unshot_len),
+        )
+    };
+    let n = point.len();
+    let patches = rho.len() / 3;
+    let valid = patch.len() == n
+        && weight.len() == n
+        && unshot.len() == 3 * n
+        && db.len() == 3
+        && rho.len() == 3 * patches
+        && received.len() == rho.len()
+        && point
+            .iter()
+            .all(|&p| (0..factor.len() as i64).contains(&i64::from(p)))
+        && patch
+            .iter()
+            .all(|&p| (0..patches as i64).contains(&i64::from(p)));
+    let written = if valid {
+        for c in 0..n {
+            let f = factor[point[c] as usize];
+            if f == 0.0 {
+                continue;
+            }
+            let w = f64::from(f) * weight[c];
+            let at = 3 * patch[c] as usize;
+            for j in 0..3 {
+                let power = f64::from(db[j]) * w;
+                received[at + j] += power;
+                unshot[3 * c + j] += power * f64::from(rho[at + j]);
+            }
+        }
+        n as Word
+    } else {
+        -1
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+    use crate::intrinsics::INTRINSICS;
+    use crate::kernels::{SamplePoint, shoot_batch_visibility};
+    use crate::mesh::{Mesh, MeshConfig};
+    use crate::octree::flat::FlatView;
+    use crate::octree::{Octree, OctreeConfig};
+    use crate::scene::cornell;
+    use crate::solver::RECEIVER_BATCH;
+
+    type Rays = unsafe extern "C" fn(
+        *const f32,
+        Word,
+        *const i32,
+        Word,
+        *const f32,
+        Word,
+        Word,
+        Word,
+        Word,
+        *const f32,
+        Word,
+        f32,
+        *mut i32,
+        Word,
+        *mut f32,
+        Word,
+        *mut f32,
+        Word,
+        *mut f32,
+        Word,
+        *mut u8,
+        Word,
+        *mut i32,
+        Word,
+        *mut Word,
+        *mut Word,
+    );
+
+    type Factors = unsafe extern "C" fn(
+        *const f32,
+        Word,
+        *const f32,
+        Word,
+        *const i32,
+        Word,
+        *const f32,
+        Word,
+        *const f32,
+        Word,
+        *const u8,
+        Word,
+        *mut f32,
+        Word,
+        *mut Word,
+    );
+
+    fn entry(name: &str) -> *const u8 {
+        let e = INTRINSICS.iter().find(|i| i.name == name).expect(name);
+        assert_eq!(
+            e.machine_params().len(),
+            e.params.len() + e.params.iter().filter(|p| p.is_array()).count()
+        );
+        e.addr
+    }
+
+    /// The batch's written arrays, sized for `receivers` and `rays` samples in all.
+    struct Scratch {
+        first: Vec<i32>,
+        samples: Vec<f32>,
+        weights: Vec<f32>,
+        rays: Vec<f32>,
+        blocked: Vec<u8>,
+        cursor: Vec<i32>,
+    }
+
+    impl Scratch {
+        fn new(receivers: usize, rays: usize) -> Scratch {
+            Scratch {
+                first: vec![0; receivers + 1],
+                samples: vec![0.0; 3 * rays],
+                weights: vec![0.0; rays],
+                rays: vec![0.0; RAY_FLOATS * rays],
+                blocked: vec![0; rays],
+                cursor: vec![0; CURSOR_INTS * rays],
+            }
+        }
+    }
+
+    /// Calls RAD.RECEIVERS.RAYS through the table; answers (taken, cast).
+    fn rays_call(
+        points: &[f32],
+        global: &[i32],
+        tri: &[f32],
+        (rays, far, seed): (Word, Word, u64),
+        grid: &[f32],
+        out: &mut Scratch,
+    ) -> (Word, Word) {
+        // SAFETY: the table says this is the signature.
+        let f: Rays = unsafe { std::mem::transmute(entry("RAD.RECEIVERS.RAYS")) };
+        let (mut taken, mut cast) = (0, 0);
+        // SAFETY: valid slices and results.
+        unsafe {
+            f(
+                points.as_ptr(),
+                points.len() as Word,
+                global.as_ptr(),
+                global.len() as Word,
+                tri.as_ptr(),
+                tri.len() as Word,
+                rays,
+                far,
+                seed as Word,
+                grid.as_ptr(),
+                grid.len() as Word,
+                1e-3,
+                out.first.as_mut_ptr(),
+                out.first.len() as Word,
+                out.samples.as_mut_ptr(),
+                out.samples.len() as Word,
+                out.weights.as_mut_ptr(),
+                out.weights.len() as Word,
+                out.rays.as_mut_ptr(),
+                out.rays.len() as Word,
+                out.blocked.as_mut_ptr(),
+                out.blocked.len() as Word,
+                out.cursor.as_mut_ptr(),
+                out.cursor.len() as Word,
+                &mut taken,
+                &mut cast,
+            )
+        };
+        (taken, cast)
+    }
+
+    /// Calls RAD.RECEIVERS.FORM.FACTORS through the table (uniform source).
+    fn factors_call(
+        points: &[f32],
+        tri: &[f32],
+        first: &[i32],
+        samples: &[f32],
+        blocked: &[u8],
+        f: &mut [f32],
+    ) -> Word {
+        // SAFETY: the table says this is the signature.
+        let call: Factors = unsafe { std::mem::transmute(entry("RAD.RECEIVERS.FORM.FACTORS")) };
+        let mut count = 0;
+        // SAFETY: valid slices and result.
+        unsafe {
+            call(
+                points.as_ptr(),
+                points.len() as Word,
+                tri.as_ptr(),
+                tri.len() as Word,
+                first.as_ptr(),
+                first.len() as Word,
+                samples.as_ptr(),
+                samples.len() as Word,
+                std::ptr::null(),
+                0,
+                blocked.as_ptr(),
+                blocked.len() as Word,
+                f.as_mut_ptr(),
+                f.len() as Word,
+                &mut count,
+            )
+        };
+        count
+    }
+
+    #[test]
+    fn a_batch_gives_the_solver_s_form_factors_bit_for_bit() {
+        let scene = cornell::load(true).expect("cornell");
+        let mesh = Mesh::from_scene(
+            &scene,
+            MeshConfig {
+                patch_size: 240.0,
+                element_size: 60.0,
+            },
+        );
+        let floats: Vec<f32> = mesh
+            .vertices
+            .iter()
+            .flat_map(|v| {
+                [v.pos, v.normal, v.eval]
+                    .into_iter()
+                    .flat_map(|x| x.to_array())
+            })
+            .collect();
+        let tris: Vec<_> = scene.triangles.iter().map(|t| t.tri).collect();
+        let octree = Octree::build(&tris, OctreeConfig::default());
+        let flat = octree.flat().expect("flat");
+        let view = FlatView::new(&flat.tree, &flat.frame).expect("view");
+        let (mut slot, mut pool) = (Vec::new(), Vec::new());
+        for v in 0..flat.voxel_count() {
+            slot.push(pool.len() as i32);
+            pool.extend_from_slice(flat.voxel(v));
+        }
+        // The light: a patch that every receiver below it faces.
+        let src = *mesh
+            .patches
+            .iter()
+            .max_by(|a, b| a.centroid().y.total_cmp(&b.centroid().y))
+            .expect("patches");
+        let tri: Vec<f32> = src.v.iter().flat_map(|v| v.to_array()).collect();
+        let config = FormFactorConfig {
+            rays: 16,
+            far_rays: 4,
+            offset: 1e-3,
+            ..FormFactorConfig::default()
+        };
+        let seed = 0x1234_5678_u64;
+        // The solver's answer for the first 300 receivers: two of its batches.
+        let n = 300;
+        let points: Vec<SamplePoint> = mesh.vertices[..n].iter().map(SamplePoint::from).collect();
+        let mut want = Vec::new();
+        for (b, chunk) in points.chunks(RECEIVER_BATCH).enumerate() {
+            let mut out = vec![0.0; chunk.len()];
+            let (s, _) = receiver_seed(seed, RECEIVER_BATCH * b);
+            shoot_batch_visibility(Some(&octree), &src, None, chunk, &config, s, &mut out);
+            want.extend(out);
+        }
+        // The node's: receivers in a scrambled order, several calls as the arrays fill.
+        let order: Vec<usize> = (0..n).map(|i| (i * 7) % n).collect();
+        let mut got = vec![f32::NAN; n];
+        let mut s = Scratch::new(n, 600);
+        let (mut next, mut calls) = (0, 0);
+        while next < n {
+            let idx = &order[next..];
+            let pts: Vec<f32> = idx
+                .iter()
+                .flat_map(|&i| floats[9 * i..9 * i + 9].to_vec())
+                .collect();
+            let global: Vec<i32> = idx.iter().map(|&i| i as i32).collect();
+            let (taken, _) = rays_call(&pts, &global, &tri, (16, 4, seed), &[], &mut s);
+            assert!(taken > 0, "taken {taken}");
+            let taken = taken as usize;
+            let end = s.first[taken] as usize;
+            let mut missing = [0i32; 1];
+            let left = view.walk(
+                &slot,
+                &pool,
+                &s.rays[..RAY_FLOATS * end],
+                &mut s.blocked[..end],
+                &mut s.cursor[..CURSOR_INTS * end],
+                &mut missing,
+            );
+            assert_eq!(left, Some(0));
+            let mut f = vec![0.0; taken];
+            let r = factors_call(
+                &pts[..9 * taken],
+                &tri,
+                &s.first[..=taken],
+                &s.samples,
+                &s.blocked,
+                &mut f,
+            );
+            assert_eq!(r, taken as Word);
+            for (k, &i) in idx[..taken].iter().enumerate() {
+                got[i] = f[k];
+            }
+            next += taken;
+            calls += 1;
+        }
+        assert!(calls > 1, "the arrays filled: {calls} calls");
+        assert!(want.iter().any(|&f| f > 0.0));
+        let bits = |xs: &[f32]| xs.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&got), bits(&want));
+    }
+
+    #[test]
+    fn wrong_lengths_answer_minus_one_and_write_nothing() {
+        // Four floor points under a downward-facing ceiling triangle.
+        let pts: Vec<f32> = (0..4)
+            .flat_map(|i| {
+                let x = 100.0 + 50.0 * i as f32;
+                [x, 0.0, 200.0, 0.0, 1.0, 0.0, x, 0.01, 200.0]
+            })
+            .collect();
+        let tri = [0.0, 548.0, 0.0, 556.0, 548.0, 0.0, 0.0, 548.0, 559.0];
+        let mut s = Scratch::new(4, 64);
+        s.first.fill(-7);
+        let all = [0, 1, 2, 3];
+        // one INT short of the points
+        assert_eq!(
+            rays_call(&pts, &all[..3], &tri, (16, 4, 1), &[], &mut s).0,
+            -1
+        );
+        // far rays over rays, a grid that is no density, a negative index
+        assert_eq!(rays_call(&pts, &all, &tri, (16, 17, 1), &[], &mut s).0, -1);
+        assert_eq!(
+            rays_call(&pts, &all, &tri, (16, 4, 1), &[1.0; 5], &mut s).0,
+            -1
+        );
+        assert_eq!(
+            rays_call(&pts, &[0, 1, -2, 3], &tri, (16, 4, 1), &[], &mut s).0,
+            -1
+        );
+        assert!(s.first.iter().all(|&x| x == -7));
+        // too little room for the first receiver's samples
+        let mut tiny = Scratch::new(4, 2);
+        assert_eq!(
+            rays_call(&pts, &all, &tri, (16, 4, 1), &[], &mut tiny).0,
+            -1
+        );
+        // room for two receivers' samples: two taken, all 32 rays cast
+        let mut two = Scratch::new(4, 32);
+        assert_eq!(
+            rays_call(&pts, &all, &tri, (16, 16, 1), &[], &mut two),
+            (2, 32)
+        );
+        assert_eq!(&two.first[..3], &[0, 16, 32]);
+        // the form factors refuse `first` not starting at 0
+        let mut f = [5.0f32; 4];
+        assert_eq!(
+            factors_call(&pts, &tri, &[-7; 5], &s.samples, &s.blocked, &mut f),
+            -1
+        );
+        assert!(f.iter().all(|&x| x == 5.0));
+        // and answer the two receivers that were taken
+        let r = factors_call(
+            &pts[..18],
+            &tri,
+            &two.first[..3],
+            &two.samples,
+            &two.blocked,
+            &mut f,
+        );
+        assert_eq!(r, 2);
+        assert!(f[0] > 0.0 && f[1] > 0.0 && f[2] == 5.0);
+    }
+
+    type Receive = unsafe extern "C" fn(
+        *const i32,
+        Word,
+        *const i32,
+        Word,
+        *const f64,
+        Word,
+        *const f32,
+        Word,
+        *const f32,
+        Word,
+        *const f32,
+        Word,
+        *mut f64,
+        Word,
+        *mut f64,
+        Word,
+        *mut Word,
+    );
+
+    /// Calls RAD.CORNERS.RECEIVE through the table with db = (1, 2, 4).
+    fn receive(
+        (point, patch, weight): (&[i32], &[i32], &[f64]),
+        factor: &[f32],
+        rho: &[f32],
+        received: &mut [f64],
+        unshot: &mut [f64],
+    ) -> Word {
+        // SAFETY: the table says this is the signature.
+        let f: Receive = unsafe { std::mem::transmute(entry("RAD.CORNERS.RECEIVE")) };
+        let db = [1.0f32, 2.0, 4.0];
+        let mut count = 0;
+        // SAFETY: valid slices and result.
+        unsafe {
+            f(
+                point.as_ptr(),
+                point.len() as Word,
+                patch.as_ptr(),
+                patch.len() as Word,
+                weight.as_ptr(),
+                weight.len() as Word,
+                factor.as_ptr(),
+                factor.len() as Word,
+                db.as_ptr(),
+                3,
+                rho.as_ptr(),
+                rho.len() as Word,
+                received.as_mut_ptr(),
+                received.len() as Word,
+                unshot.as_mut_ptr(),
+                unshot.len() as Word,
+                &mut count,
+            )
+        };
+        count
+    }
+
+    #[test]
+    fn corners_book_power_into_their_patches_and_their_unshot() {
+        // Three corners: two of patch 1 at points 0 and 2, one of patch 0 at point 1 (F = 0).
+        let corners: (&[i32], &[i32], &[f64]) = (&[0, 1, 2], &[1, 0, 1], &[2.0, 3.0, 4.0]);
+        let factor = [0.5f32, 0.0, 0.25];
+        let rho = [0.1f32, 0.1, 0.1, 0.5, 0.5, 0.5];
+        let (mut received, mut unshot) = (vec![0.0; 6], vec![1.0; 9]);
+        assert_eq!(
+            receive(corners, &factor, &rho, &mut received, &mut unshot),
+            3
+        );
+        // patch 1 gets db * (0.5 * 2 + 0.25 * 4) = 2 db; patch 0 nothing
+        assert_eq!(received, [0.0, 0.0, 0.0, 2.0, 4.0, 8.0]);
+        assert_eq!(unshot, [1.5, 2.0, 3.0, 1.0, 1.0, 1.0, 1.5, 2.0, 3.0]);
+        // a point or patch out of range, or a short unshot: -1, nothing written
+        let (mut r, mut u) = (vec![7.0; 6], vec![7.0; 9]);
+        let bad_point: (&[i32], &[i32], &[f64]) = (&[0, 3, 2], corners.1, corners.2);
+        assert_eq!(receive(bad_point, &factor, &rho, &mut r, &mut u), -1);
+        let bad_patch: (&[i32], &[i32], &[f64]) = (corners.0, &[1, 2, 1], corners.2);
+        assert_eq!(receive(bad_patch, &factor, &rho, &mut r, &mut u), -1);
+        assert_eq!(receive(corners, &factor, &rho, &mut r, &mut u[..8]), -1);
+        assert!(r.iter().chain(&u).all(|&x| x == 7.0));
+    }
+}
