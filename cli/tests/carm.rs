@@ -220,6 +220,66 @@ fn carm_stops_on_the_error_estimate_where_the_reference_solver_does() {
     assert_agree(&carm, &reference, "");
 }
 
+/// The rms_error column of a run's convergence.csv, by shot.
+fn rms_by_shot(out: &Path) -> Vec<(u64, f64)> {
+    let text = std::fs::read_to_string(out.join("convergence.csv")).expect("convergence.csv");
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).expect(name);
+    let (shots, rms) = (col("shots"), col("rms_error"));
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            let rms = f[rms]
+                .parse()
+                .unwrap_or_else(|_| panic!("no rms_error in {l}"));
+            (f[shots].parse().expect("shots"), rms)
+        })
+        .collect()
+}
+
+/// With --reference, every shot's row has its errors, from the power each object has received
+/// (carm.occ reports the irradiance at its points only at the end): the row of shot 30 of a
+/// longer run is the final answer of a run that stops at shot 30.
+#[test]
+fn carm_reports_error_against_run_time_at_every_shot() {
+    let reference = scratch("carm-rows-reference");
+    radiosity(&reference, &[]);
+    let against = reference.join("report.json");
+    let against = against.to_str().expect("a UTF-8 path");
+    let run = |name: &str, shots: &str| {
+        let out = scratch(name);
+        let until = format!("shots={shots}");
+        radiosity(
+            &out,
+            &[
+                "--solver",
+                "carm",
+                "--nodes",
+                "4",
+                "--threads",
+                "1",
+                "--until",
+                &until,
+                "--reference",
+                against,
+            ],
+        );
+        rms_by_shot(&out)
+    };
+    let (short, long) = (run("carm-rows-30", "30"), run("carm-rows-40", "40"));
+    assert_eq!(long.len(), 40, "a row a shot");
+    assert!(long[0].1 > 2.0 * long[39].1, "the error falls: {long:?}");
+    let (at_30, end_30) = (long[29], short[29]);
+    assert_eq!((at_30.0, end_30.0), (30, 30));
+    assert!(
+        (at_30.1 - end_30.1).abs() <= 1e-5 * end_30.1,
+        "shot 30 of the longer run {} against the end of the shorter {}",
+        at_30.1,
+        end_30.1
+    );
+}
+
 /// Overshooting by the ambient estimate, always on: carm.occ lends and takes back the overshoot
 /// as the reference solver does.
 #[test]

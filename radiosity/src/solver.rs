@@ -816,7 +816,32 @@ impl<'a> Solver<'a> {
             o.0 += a;
             o.1 += mean * a;
         }
-        out.into_iter()
+        self.means_of(out)
+    }
+
+    /// Each object's area (the sum of its elements').
+    pub fn object_areas(&self) -> Vec<f64> {
+        let mut out = vec![0.0; self.scene.objects.len()];
+        for (e, &a) in self.mesh.elements.iter().zip(&self.element_area) {
+            out[e.object as usize] += a;
+        }
+        out
+    }
+
+    /// [`Solver::errors`] of a solution known by the power each object has received so far
+    /// (`received[o]`: the sum over its patches of every shot's received power, which is its
+    /// irradiance integrated over its area, element by element as [`Solver::object_means`]
+    /// integrates it), with its `areas` ([`Solver::object_areas`]). A node program reports the
+    /// power its patches receive at every shot but the irradiance at its points only at the
+    /// end, so its error rows come from this.
+    pub fn errors_of_received(&self, areas: &[f64], received: &[DVec3]) -> Option<Errors> {
+        let sums = areas.iter().zip(received).map(|(&a, &r)| (a, r)).collect();
+        Errors::of(&self.means_of(sums), self.reference.as_ref()?)
+    }
+
+    /// Each object's area and mean B from its area and its irradiance integrated over it.
+    fn means_of(&self, sums: Vec<(f64, DVec3)>) -> Vec<(f64, DVec3)> {
+        sums.into_iter()
             .zip(&self.scene.objects)
             .map(|((a, s), obj)| {
                 let b = obj.emission.as_dvec3() * std::f64::consts::PI

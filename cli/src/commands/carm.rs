@@ -444,6 +444,9 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
         .map(|&o| solver.scene.objects[o as usize].reflectance.as_dvec3())
         .collect();
     let patches = rho.len();
+    // Each object's received power so far, for the error rows of a run with --reference.
+    let areas = solver.object_areas();
+    let mut by_object = vec![DVec3::ZERO; areas.len()];
     let mut nodes = Vec::new();
     let mut results = 0;
     let mut at = 0;
@@ -476,10 +479,12 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
                 let mut absorbed = DVec3::ZERO;
                 solver.unshot[src] += lent;
                 solver.unshot[src] -= shot;
-                for ((power, rho), unshot) in received.iter().zip(&rho).zip(&mut solver.unshot) {
+                let each = received.iter().zip(&rho).zip(&mut solver.unshot);
+                for (((power, rho), unshot), &o) in each.zip(&solver.mesh.patch_object) {
                     total += *power;
                     absorbed += *power * (DVec3::ONE - *rho);
                     *unshot += *power * *rho;
+                    by_object[o as usize] += *power;
                 }
                 solver.unshot[src] -= lent;
                 solver.book_totals(shot, total, absorbed);
@@ -491,7 +496,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
                     seconds: micros as f64 * 1e-6,
                     unshot_fraction: solver.unshot_fraction(),
                     vertices: solver.mesh.vertices.len(),
-                    errors: None,
+                    errors: solver.errors_of_received(&areas, &by_object),
                 });
             }
             Message::Result(g, h) => {
@@ -529,7 +534,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
         "carm.occ returned {results} of {} sample points",
         solver.irradiance.len()
     );
-    // carm.occ reports the irradiance once, at the end: only the last row has errors.
+    // The last row's errors from the irradiance carm.occ reports at the end.
     let errors = solver.errors();
     if let Some(last) = solver.history.last_mut() {
         last.errors = errors;
