@@ -155,6 +155,43 @@ fn carm_on_1_4_13_and_40_nodes_gives_one_solution() {
     }
 }
 
+/// With no room to spare (`--load-tolerance 1`), the nodes whose hash is full send sample points
+/// to a re-hash's node: no node holds more than its share, and the solution is the same.
+#[test]
+fn carm_rehashes_points_a_full_node_cannot_take() {
+    let tight = radiosity(
+        &scratch("carm-tight"),
+        &[
+            "--solver",
+            "carm",
+            "--nodes",
+            "13",
+            "--threads",
+            "1",
+            "--load-tolerance",
+            "1",
+        ],
+    );
+    let nodes = tight["nodes"].as_array().expect("nodes");
+    let points = tight["scene"]["final_vertices"].as_u64().expect("vertices");
+    let share = points.div_ceil(13);
+    let rehashed: u64 = nodes
+        .iter()
+        .map(|n| n["rehashed"].as_u64().expect("n"))
+        .sum();
+    assert!(rehashed > 0, "some points were re-hashed");
+    for n in nodes {
+        assert!(n["points"].as_u64().expect("points") <= share, "{n}");
+    }
+    let (_, roomy) = carm_runs()
+        .iter()
+        .find(|(n, _)| *n == "13")
+        .expect("13 nodes");
+    for ((name, b), (_, r)) in means(&tight).iter().zip(means(roomy).iter()) {
+        assert!(apart(b, r) <= 1e-9, "{name}: {b:?} against {r:?}");
+    }
+}
+
 #[test]
 fn carm_on_1_4_13_and_40_nodes_agrees_with_the_reference_solver() {
     let reference = radiosity(&scratch("carm-reference"), &["--solver", "reference"]);
@@ -309,7 +346,7 @@ fn carm_refuses_what_it_cannot_do_clearly() {
             ][..],
             "carm.occ runs on 1 to 1024 nodes",
         ),
-        // About 25,000 sample points: more than carm.occ's arrays hold.
+        // More rays per form factor than carm.occ's fixed arrays take.
         (
             &[
                 "--solver",
@@ -317,11 +354,22 @@ fn carm_refuses_what_it_cannot_do_clearly() {
                 "--no-adapt",
                 "--until",
                 "unshot=0.01",
-                "--element-size",
-                "8",
+                "--rays",
+                "2000",
             ][..],
-            "over carm.occ's capacities: at most an octree of 65536 tree INTs and 8192 voxels \
-             of 262144 REAL32s in all (16384 in one), 2048 patches, 16384 sample points",
+            "over carm.occ's capacities",
+        ),
+        (
+            &[
+                "--solver",
+                "carm",
+                "--no-adapt",
+                "--until",
+                "unshot=0.01",
+                "--load-tolerance",
+                "0.5",
+            ][..],
+            "--load-tolerance 0.5",
         ),
     ] {
         let output = Command::new(env!("CARGO_BIN_EXE_occ"))

@@ -42,6 +42,29 @@ struct PoolState {
     running: usize,
     /// A driven pool's nodes can no longer get mail from elsewhere: parked nodes are deadlocked.
     settled: bool,
+    /// Workers waiting on the condition variable: nobody to notify when 0 (a notification is a
+    /// system call, and a message between two nodes of one pool would otherwise cost two).
+    waiting: usize,
+    /// Parked nodes with a timer: no clock to read for them when 0.
+    timed: usize,
+}
+
+impl PoolState {
+    /// Takes the node parked in slot `i` out of it (leaving `Running`), keeping `timed` true.
+    fn unpark(&mut self, i: usize) -> Box<Node> {
+        let Slot::Parked(node, due) = std::mem::replace(&mut self.slots[i], Slot::Running) else {
+            unreachable!("callers check that slot {i} is parked");
+        };
+        if due.is_some() {
+            self.timed -= 1;
+        }
+        node
+    }
+
+    /// Whether any worker waits to be notified.
+    fn anyone_waiting(&self) -> bool {
+        self.waiting > 0
+    }
 }
 
 /// Timeslices a node runs on a pool thread before it gives way to another ready node.
@@ -67,12 +90,12 @@ impl PoolShared {
     pub(crate) fn wake(&self, i: usize) {
         let mut st = self.lock();
         if let Slot::Parked(..) = st.slots[i] {
-            let Slot::Parked(node, _) = std::mem::replace(&mut st.slots[i], Slot::Running) else {
-                unreachable!("checked above");
-            };
+            let node = st.unpark(i);
             st.slots[i] = Slot::Ready(node);
             st.ready.push_back(i);
-            self.work.notify_one();
+            if st.anyone_waiting() {
+                self.work.notify_one();
+            }
         }
     }
 
@@ -163,6 +186,8 @@ impl Network {
                 ready: (0..n).collect(),
                 running: 0,
                 settled: false,
+                waiting: 0,
+                timed: 0,
             }),
             work: Condvar::new(),
             flags: nodes
@@ -214,7 +239,9 @@ impl Network {
 fn worker(pool: &PoolShared) {
     let mut st = pool.lock();
     loop {
-        wake_due_timers(&mut st);
+        if st.timed > 0 {
+            wake_due_timers(&mut st);
+        }
         if let Some(i) = st.ready.pop_front() {
             let Slot::Ready(mut node) = std::mem::replace(&mut st.slots[i], Slot::Running) else {
                 unreachable!("ready nodes are in Ready slots");
@@ -241,7 +268,9 @@ fn worker(pool: &PoolShared) {
                 stop_parked(&mut st);
             }
             settle(&mut st, i, node, outcome);
-            pool.work.notify_all();
+            if st.anyone_waiting() {
+                pool.work.notify_all();
+            }
             continue;
         }
         if st.running == 0 {
@@ -274,13 +303,17 @@ fn worker(pool: &PoolShared) {
 
 fn wait_for<'a>(
     pool: &'a PoolShared,
-    st: MutexGuard<'a, PoolState>,
+    mut st: MutexGuard<'a, PoolState>,
     d: Duration,
 ) -> MutexGuard<'a, PoolState> {
-    pool.work
+    st.waiting += 1;
+    let mut st = pool
+        .work
         .wait_timeout(st, d)
         .unwrap_or_else(|p| p.into_inner())
-        .0
+        .0;
+    st.waiting -= 1;
+    st
 }
 
 /// Puts a node that returned from `run_until_idle` back in its slot.
@@ -291,6 +324,9 @@ fn settle(st: &mut PoolState, i: usize, node: Box<Node>, outcome: Result<Idle, R
                 st.ready.push_back(i);
                 Slot::Ready(node)
             } else {
+                if timer.is_some() {
+                    st.timed += 1;
+                }
                 Slot::Parked(node, timer.map(|d| Instant::now() + d))
             }
         }
@@ -310,6 +346,9 @@ fn finish(mut node: Box<Node>, r: Result<(), RunError>) -> Slot {
 }
 
 fn earliest_due(st: &PoolState) -> Option<Instant> {
+    if st.timed == 0 {
+        return None;
+    }
     st.slots
         .iter()
         .filter_map(|s| match s {
@@ -323,9 +362,7 @@ fn wake_due_timers(st: &mut PoolState) {
     let now = Instant::now();
     for i in 0..st.slots.len() {
         if matches!(st.slots[i], Slot::Parked(_, Some(due)) if due <= now) {
-            let Slot::Parked(node, _) = std::mem::replace(&mut st.slots[i], Slot::Running) else {
-                unreachable!("checked above");
-            };
+            let node = st.unpark(i);
             st.slots[i] = Slot::Ready(node);
             st.ready.push_back(i);
         }
@@ -334,26 +371,22 @@ fn wake_due_timers(st: &mut PoolState) {
 
 /// The network has stopped: every parked node stops too.
 fn stop_parked(st: &mut PoolState) {
-    for slot in st.slots.iter_mut() {
-        if let Slot::Parked(..) = slot {
-            let Slot::Parked(node, _) = std::mem::replace(slot, Slot::Running) else {
-                unreachable!("checked above");
-            };
+    for i in 0..st.slots.len() {
+        if let Slot::Parked(..) = st.slots[i] {
+            let node = st.unpark(i);
             let halt = RunError::Halted(node.stopped_halt());
-            *slot = finish(node, Err(halt));
+            st.slots[i] = finish(node, Err(halt));
         }
     }
 }
 
 /// No node is ready or running and no parked node has a timer: each parked node is deadlocked.
 fn report_deadlocks(st: &mut PoolState) {
-    for slot in st.slots.iter_mut() {
-        if let Slot::Parked(..) = slot {
-            let Slot::Parked(node, _) = std::mem::replace(slot, Slot::Running) else {
-                unreachable!("checked above");
-            };
+    for i in 0..st.slots.len() {
+        if let Slot::Parked(..) = st.slots[i] {
+            let node = st.unpark(i);
             let report = RunError::Deadlock(node.deadlock_report());
-            *slot = finish(node, Err(report));
+            st.slots[i] = finish(node, Err(report));
         }
     }
 }

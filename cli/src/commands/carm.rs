@@ -15,6 +15,7 @@ use std::sync::{Arc, Mutex};
 
 use glam::{DVec3, Vec3};
 use occ_codegen::network::{NetworkOptions, NetworkOutcome};
+use occ_radiosity::mesh::Mesh;
 use occ_radiosity::overshoot::Acceleration;
 use occ_radiosity::solver::{ConvergencePoint, Solver, Until};
 use occ_runtime::remote::Transport;
@@ -40,6 +41,7 @@ mod tag {
     pub const COUNTERS: i32 = 3;
     pub const PATCHES: i32 = 4;
     pub const REFUSED: i32 = 5;
+    pub const REHASHED: i32 = 6;
 }
 
 /// How to run carm.occ.
@@ -52,7 +54,13 @@ pub struct CarmSettings {
     /// The node program to run instead of carm.occ (its file name and text): any program that
     /// speaks the same host protocol.
     pub program: Option<(String, String)>,
+    /// A node holds at most this many times its even share of the sample points (and of their
+    /// element corners); a point whose hash names a full node is re-hashed to another.
+    pub load_tolerance: f64,
 }
+
+/// The default [`CarmSettings::load_tolerance`].
+pub const LOAD_TOLERANCE: f64 = 1.25;
 
 /// Called after each shot with the shots so far and the unshot fraction before the last one.
 pub type OnShot = Box<dyn FnMut(u64, f64) + Send>;
@@ -74,6 +82,8 @@ pub struct NodeCounters {
     pub voxels: u64,
     /// Their bytes.
     pub voxel_bytes: u64,
+    /// Sample points it took as a later choice, their first choice being full.
+    pub rehashed: u64,
     /// Channel communications (soft and link) it made.
     pub communications: u64,
     /// Fraction of the wall time it spent running processes.
@@ -130,9 +140,18 @@ pub fn solve(
     } else {
         Vec::new()
     };
+    let capacities = capacities(solver, settings)?;
     let compiled = match &settings.program {
-        Some((name, text)) => compile(name, text)?,
-        None => compile("carm.occ", PROGRAM)?,
+        Some((name, text)) => compile(name, &sized(text, &capacities).0)?,
+        None => {
+            let (text, found) = sized(PROGRAM, &capacities);
+            anyhow::ensure!(
+                found == capacities.len(),
+                "carm.occ declares {found} of its {} capacities",
+                capacities.len()
+            );
+            compile("carm.occ", &text)?
+        }
     };
     let shape: Shape = format!("tree3:{}", settings.nodes)
         .parse()
@@ -181,8 +200,93 @@ pub fn solve(
         failed.join("\n"),
         text
     );
-    let nodes = book(solver, &out)?;
-    Ok(Some(report(&outcome, nodes)))
+    let booked = book(solver, &out)?;
+    Ok(Some(report(&outcome, booked)))
+}
+
+/// The values of carm.occ's capacities (`VAL INT NAME IS n:` in its capacities block) for
+/// `solver`'s scene on `settings.nodes` nodes: the scene's counts, and per node its share of the
+/// sample points and of their element corners times the load tolerance (with room for one
+/// more point's corners), beyond which the controller re-hashes a point to another node.
+fn capacities(
+    solver: &Solver,
+    settings: &CarmSettings,
+) -> anyhow::Result<Vec<(&'static str, usize)>> {
+    let tolerance = settings.load_tolerance;
+    anyhow::ensure!(
+        tolerance.is_finite() && tolerance >= 1.0,
+        "--load-tolerance {tolerance}: a node must be able to hold at least its even share (1 or more)"
+    );
+    let mesh = &solver.mesh;
+    let flat = solver
+        .octree
+        .flat()
+        .map_err(|e| anyhow::anyhow!("carm.occ cannot take the scene's octree: {e}"))?;
+    let corners_at = corners_at_points(mesh);
+    let most_at_one = corners_at.iter().copied().max().unwrap_or(0);
+    let share = |n: usize| (tolerance * n as f64 / settings.nodes as f64).ceil() as usize;
+    let mut per_patch = vec![0usize; mesh.patches.len()];
+    for e in &mesh.elements {
+        per_patch[e.patch as usize] += 1;
+    }
+    let voxels = flat.voxel_count();
+    let largest = (0..voxels).map(|v| flat.voxel(v).len()).max().unwrap_or(0);
+    let points = mesh.vertices.len();
+    Ok(vec![
+        ("MAX.POINTS", points),
+        ("NODE.POINTS", share(points).min(points)),
+        ("NODE.CORNERS", share(3 * mesh.elements.len()) + most_at_one),
+        ("MAX.ELEMENTS", mesh.elements.len()),
+        (
+            "MAX.PATCH.ELEMENTS",
+            per_patch.iter().copied().max().unwrap_or(0),
+        ),
+        ("MAX.PATCHES", mesh.patches.len()),
+        ("MAX.TREE", flat.tree.len()),
+        ("MAX.VOXELS", voxels),
+        ("MAX.POOL", flat.pool().len()),
+        ("MAX.VOXEL", largest),
+        ("MAX.OBJECTS", solver.scene.objects.len()),
+    ]
+    .into_iter()
+    .map(|(name, n)| (name, n.max(1)))
+    .collect())
+}
+
+/// How many element corners sit at each sample point.
+fn corners_at_points(mesh: &Mesh) -> Vec<usize> {
+    let mut out = vec![0; mesh.vertices.len()];
+    for e in &mesh.elements {
+        for v in e.v {
+            out[v as usize] += 1;
+        }
+    }
+    out
+}
+
+/// `program` with the value of each `VAL INT NAME IS n:` line whose name `capacities` lists
+/// set to its capacity, and how many of the names it found. Only whole declarations on a line
+/// of their own are rewritten (a comment after the colon stays).
+fn sized(program: &str, capacities: &[(&str, usize)]) -> (String, usize) {
+    let mut found = 0;
+    let mut out = String::with_capacity(program.len() + 64);
+    for line in program.split_inclusive('\n') {
+        let decl = line.strip_prefix("VAL INT ").and_then(|rest| {
+            let (name, rest) = rest.split_once(" IS ")?;
+            let (value, tail) = rest.split_once(':')?;
+            value.trim().parse::<i64>().ok()?;
+            let (_, n) = capacities.iter().find(|(c, _)| *c == name)?;
+            Some(format!("VAL INT {name} IS {n}:{tail}"))
+        });
+        match decl {
+            Some(d) => {
+                found += 1;
+                out.push_str(&d);
+            }
+            None => out.push_str(line),
+        }
+    }
+    (out, found)
 }
 
 /// Compiles the node program `text` (named `name` in its diagnostics).
@@ -315,10 +419,11 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
         }
         w.int(o as i32);
     }
-    for v in &mesh.vertices {
+    for (v, c) in mesh.vertices.iter().zip(corners_at_points(mesh)) {
         w.vec3(v.pos);
         w.vec3(v.normal);
         w.vec3(v.eval);
+        w.int(int(c, "element corners at one sample point")?);
     }
     for e in by_patch.iter().map(|&e| &mesh.elements[e]) {
         for v in e.v {
@@ -362,6 +467,8 @@ enum Message {
     /// voxels' REAL32s, one voxel's REAL32s, patches, sample points, rays, nodes, elements,
     /// elements of one patch and objects.
     Refused([i32; 11]),
+    /// The sample points each node took as a later choice (re-hashed).
+    Rehashed(Vec<u64>),
     /// The end.
     End,
 }
@@ -422,6 +529,11 @@ impl Message {
                 let count = usize::try_from(r.int()?).map_err(|_| Short)?;
                 Message::Patches((0..count / 3).map(|_| rgb64(r)).collect::<Result<_, _>>()?)
             }
+            tag::REHASHED => {
+                let count = usize::try_from(r.int()?).map_err(|_| Short)?;
+                let each = (0..count).map(|_| r.int().map(|n| n as u64));
+                Message::Rehashed(each.collect::<Result<_, _>>()?)
+            }
             tag::REFUSED => {
                 let mut limits = [0i32; 11];
                 for x in &mut limits {
@@ -434,9 +546,17 @@ impl Message {
     }
 }
 
-/// Books what the root wrote into `solver`; returns the nodes' own counters (node, points,
-/// corners, form factors, rays, voxels held, their bytes).
-fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
+/// What the root reported of its nodes besides the solution.
+struct Booked {
+    /// Each node's own counters: node, points, corners, form factors, rays, voxels held, their
+    /// bytes.
+    nodes: Vec<[u64; 7]>,
+    /// The sample points each node took as a later choice.
+    rehashed: Vec<u64>,
+}
+
+/// Books what the root wrote into `solver`; returns what it reported of the nodes.
+fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
     let rho: Vec<DVec3> = solver
         .mesh
         .patch_object
@@ -448,6 +568,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
     let areas = solver.object_areas();
     let mut by_object = vec![DVec3::ZERO; areas.len()];
     let mut nodes = Vec::new();
+    let mut rehashed = Vec::new();
     let mut results = 0;
     let mut at = 0;
     loop {
@@ -507,6 +628,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
                 results += 1;
             }
             Message::Counters(c) => nodes.push(c),
+            Message::Rehashed(r) => rehashed = r,
             Message::Patches(theirs) => {
                 anyhow::ensure!(
                     theirs.len() == patches,
@@ -540,16 +662,17 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Vec<[u64; 7]>> {
         last.errors = errors;
     }
     nodes.sort_by_key(|c| c[0]);
-    Ok(nodes)
+    Ok(Booked { nodes, rehashed })
 }
 
 /// The report's per-node and per-link figures.
-fn report(outcome: &NetworkOutcome, nodes: Vec<[u64; 7]>) -> CarmReport {
+fn report(outcome: &NetworkOutcome, booked: Booked) -> CarmReport {
     let wall = outcome.elapsed.as_secs_f64();
+    let rehashed = |node: u64| booked.rehashed.get(node as usize).copied().unwrap_or(0);
     let nodes = outcome
         .nodes
         .iter()
-        .zip(nodes)
+        .zip(booked.nodes)
         .map(|(n, c)| NodeCounters {
             node: c[0] as usize,
             points: c[1],
@@ -558,6 +681,7 @@ fn report(outcome: &NetworkOutcome, nodes: Vec<[u64; 7]>) -> CarmReport {
             rays: c[4],
             voxels: c[5],
             voxel_bytes: c[6],
+            rehashed: rehashed(c[0]),
             communications: n.stats.communications,
             busy: if wall > 0.0 {
                 n.busy.as_secs_f64() / wall

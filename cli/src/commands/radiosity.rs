@@ -92,6 +92,10 @@ pub struct Args {
     /// program that speaks its host protocol (programs/README.md).
     #[arg(long, value_name = "FILE.occ")]
     pub program: Option<PathBuf>,
+    /// `--solver carm`: a node holds at most this many times its even share of the sample
+    /// points (and of their element corners); a point whose hash names a full node is re-hashed.
+    #[arg(long, value_name = "F", default_value_t = carm::LOAD_TOLERANCE)]
+    pub load_tolerance: f64,
     /// Where carm.occ's nodes run: inproc (this process) or mpi (spread over the ranks of
     /// `mpirun`, rank 0 playing the host and writing the outputs; needs a build with
     /// --features mpi).
@@ -350,6 +354,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                 nodes: args.nodes,
                 threads,
                 program,
+                load_tolerance: args.load_tolerance,
             };
             let on_shot = Box::new(progress.on_shot());
             let Some(report) = carm::solve(&mut solver, &settings, on_shot, transport.transport())?
