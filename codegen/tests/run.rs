@@ -211,3 +211,31 @@ PROC main (CHAN BYTE keyboard?, screen!, error!)
 "#;
     assert_eq!(run(src), "12341234");
 }
+
+/// The tests compile through the one front end, so `#OPTION` acts here as in `occ run`: with
+/// `#OPTION "N"` a PAR the usage rules refuse (a variable subscript against a constant one)
+/// compiles and runs; without it, it is refused.
+#[test]
+fn option_n_switches_the_usage_rules_off() {
+    let program = r#"#INCLUDE "course.module"
+PROC main (CHAN BYTE keyboard?, screen!, error!)
+  [2]INT a:
+  INT i:
+  SEQ
+    i := 1
+    PAR
+      a[0] := 10
+      a[i] := 20
+    out.int (a[0] + a[1], 0, screen!)
+:
+"#;
+    let refused = common::try_compile(program, &occ_codegen::IntrinsicSet::new());
+    let Err(message) = refused else {
+        panic!("the usage rules should refuse the PAR");
+    };
+    assert!(
+        message.contains("test.occ:9:") && message.contains("`a`"),
+        "{message}"
+    );
+    assert_eq!(run(&format!("#OPTION \"N\"\n{program}")), "30");
+}

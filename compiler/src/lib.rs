@@ -14,14 +14,21 @@
 //!
 //! The result is a [`CheckedProgram`]: side tables over the AST for the code generator.
 //!
+//! [`check_source`] is the driver every tool goes through: it preprocesses, parses and checks a
+//! program whose included files come through a [`Loader`](occ_grammar::preprocess::Loader) (a
+//! `HashMap` of names to texts will do), with the checks its `#OPTION` directives switch off
+//! switched off.
+//!
 //! # Example
 //!
 //! ```
 //! let source = "PROC p (CHAN OF INT c)\n  INT x, y:\n  PAR\n    c ? x\n    c ? y\n:\n";
-//! let parsed = occ_grammar::parse_source("p.occ", source, &mut std::collections::HashMap::new());
-//! let (checked, diagnostics) = occ_compiler::check(&parsed.program);
-//! assert!(checked.is_none());
-//! assert_eq!(diagnostics[0].message(), "`c` is used for input in more than one branch of this PAR");
+//! let front = occ_compiler::check_source("p.occ", source, &mut std::collections::HashMap::new());
+//! assert!(front.checked.is_none());
+//! assert_eq!(
+//!     front.diagnostics[0].message,
+//!     "`c` is used for input in more than one branch of this PAR"
+//! );
 //! ```
 
 #![deny(missing_docs)]
