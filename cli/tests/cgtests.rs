@@ -1,14 +1,14 @@
 //! The KRoC compiler tests (cgtests) run through `occ run`, each count compared with KRoC's.
 //!
-//! The tests are GPL and live outside the repository (see `tests/cgtests.md`), in the folder named
-//! by the `OCC_CGTESTS` environment variable. That folder's `EXPECTED` gives
+//! The tests are GPL and live outside the repository (see `tests/cgtests.md`): in the folder named
+//! by `OCC_CGTESTS`, else in `shared/cgtests` beside the repository. That folder's `EXPECTED` gives
 //! KRoC's count for each test. `tests/cgtests/known` lists the tests where occ still falls short,
 //! with the count occ reaches (or `fail`) and why; every other test must print
 //! `All N tests passed` with KRoC's N and exit 0. A test that does better than `known`
 //! says also fails, so that the list is kept true.
 //!
-//! When the variable is unset or the folder lacks `EXPECTED`, the test fails and says so: it never
-//! passes quietly.
+//! When the folder lacks `EXPECTED`, the test fails and says where it looked: it never passes
+//! quietly.
 
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -36,17 +36,15 @@ enum Got {
     Fail(String),
 }
 
-/// The folder `OCC_CGTESTS` names, made absolute (cargo runs the test in `cli/`, so a relative
-/// path is taken from there).
+/// The folder `OCC_CGTESTS` names (made absolute: cargo runs the test in `cli/`, so a relative
+/// path is taken from there), else `shared/cgtests` beside the repository, where the project's
+/// machines keep the suite.
 fn cgtests_dir() -> PathBuf {
-    let Some(dir) = std::env::var_os("OCC_CGTESTS") else {
-        panic!(
-            "OCC_CGTESTS is not set: set it to the folder that holds the KRoC cgtests and their \
-             EXPECTED counts; tests/cgtests.md says how to get them."
-        );
-    };
-    std::path::absolute(&dir)
-        .unwrap_or_else(|e| panic!("OCC_CGTESTS={}: {e}", Path::new(&dir).display()))
+    match std::env::var_os("OCC_CGTESTS") {
+        Some(dir) => std::path::absolute(&dir)
+            .unwrap_or_else(|e| panic!("OCC_CGTESTS={}: {e}", Path::new(&dir).display())),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/cgtests"),
+    }
 }
 
 /// The repository's `tests/cgtests/`: `known` and the `config.inc` the tests include.
