@@ -393,7 +393,7 @@ pub unsafe extern "C" fn corners_receive(
 #[cfg(test)]
 mod test {
     use super::*;
-    use crate::intrinsics::INTRINSICS;
+    use crate::intrinsics::test::address as entry;
     use crate::kernels::{SamplePoint, shoot_batch_visibility};
     use crate::mesh::{Mesh, MeshConfig};
     use crate::octree::flat::FlatView;
@@ -447,15 +447,6 @@ mod test {
         Word,
         *mut Word,
     );
-
-    fn entry(name: &str) -> *const u8 {
-        let e = INTRINSICS.iter().find(|i| i.name == name).expect(name);
-        assert_eq!(
-            e.machine_params().len(),
-            e.params.len() + e.params.iter().filter(|p| p.is_array()).count()
-        );
-        e.addr
-    }
 
     /// The batch's written arrays, sized for `receivers` and `rays` samples in all.
     struct Scratch {

@@ -25,6 +25,18 @@ fn entry(name: &str) -> &'static Intrinsic {
     INTRINSICS.iter().find(|i| i.name == name).expect(name)
 }
 
+/// The address of the intrinsic `name`, once its machine parameters are checked to be an
+/// address and a length per array and one word per scalar (for tests that call it by a
+/// function type of their own).
+pub(super) fn address(name: &str) -> *const u8 {
+    let e = entry(name);
+    assert_eq!(
+        e.machine_params().len(),
+        e.params.len() + e.params.iter().filter(|p| p.is_array()).count()
+    );
+    e.addr
+}
+
 /// Calls RAD.POINT.POLYGON.FF through the table.
 fn pp(p: &[f32], n: &[f32], poly: &[f32]) -> f32 {
     let e = entry("RAD.POINT.POLYGON.FF");

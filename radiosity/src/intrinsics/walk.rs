@@ -108,7 +108,7 @@ fn locate(view: &FlatView, p: Vec3) -> Word {
 #[cfg(test)]
 mod test {
     use super::*;
-    use crate::intrinsics::INTRINSICS;
+    use crate::intrinsics::test::address as entry;
     use crate::octree::flat::{CURSOR_INTS, START};
     use crate::octree::{Octree, OctreeConfig, Traversal};
     use crate::scene::cornell;
@@ -135,15 +135,6 @@ mod test {
 
     type OfPoint =
         unsafe extern "C" fn(*const i32, Word, *const f32, Word, *const f32, Word, *mut Word);
-
-    fn entry(name: &str) -> *const u8 {
-        let e = INTRINSICS.iter().find(|i| i.name == name).expect(name);
-        assert_eq!(
-            e.machine_params().len(),
-            e.params.len() + e.params.iter().filter(|p| p.is_array()).count()
-        );
-        e.addr
-    }
 
     /// Calls RAD.RAYS.WALK through the table.
     #[allow(clippy::too_many_arguments, reason = "the intrinsic's arrays")]
