@@ -367,15 +367,15 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
         w.real64(tally.rho_avg[c]);
     }
     w.real64(config.full_rays_power);
-    // carm.occ does not close the form-factor rows of a closed convex scene as the reference
-    // solver does, and overshooting by the ambient estimate without them ends biased (a furnace
-    // box of ρ 0.99 came out 3% low): there `auto` means plain refinement.
+    // Overshooting by the ambient estimate: off, always, or while the scene is stiff.
     w.int(match config.acceleration {
         Acceleration::Off => 0,
         Acceleration::Ambient => 1,
-        Acceleration::Auto if solver.analysis.closed => 0,
         Acceleration::Auto => 2,
     });
+    // Closing each shot's form-factor row where the reference solver does (a closed convex
+    // enclosure: every shot's power lands on its surfaces).
+    w.int(i32::from(solver.stages.close_rows));
     let mut object_area = vec![0.0f64; scene.objects.len()];
     for e in &mesh.elements {
         object_area[e.object as usize] += mesh.tri(e).area() as f64;

@@ -281,10 +281,11 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     );
     let octree_time = t2.elapsed().as_secs_f64();
     if let SolverKind::Carm = args.solver {
-        // carm.occ's stages: it always casts shadow rays and does not close form-factor rows.
+        // carm.occ always casts shadow rays; it closes form-factor rows where the reference
+        // solver does.
         solver.stages = Stages {
             shadow_rays: true,
-            close_rows: false,
+            close_rows: solver.stages.close_rows,
         };
     }
     if reports {
@@ -335,13 +336,6 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                     args.nodes, args.until
                 ),
             );
-            if args.acceleration == Acceleration::Auto && solver.analysis.closed && reports {
-                eprintln!(
-                    "note: carm.occ does not close the form-factor rows of this closed convex \
-                     scene, so it does not overshoot by the ambient estimate here (--overshoot F \
-                     sets a fixed factor)"
-                );
-            }
             let program = match &args.program {
                 Some(path) => {
                     let text = std::fs::read_to_string(path)

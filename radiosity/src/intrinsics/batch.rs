@@ -390,6 +390,54 @@ pub unsafe extern "C" fn corners_receive(
     unsafe { *count = written };
 }
 
+/// `PROC RAD.CORNERS.ROW (VAL []INT point, VAL []REAL64 weight, VAL []REAL32 factor,
+/// []REAL64 row, RESULT INT count)`: the share of a shot's form-factor row that the n element
+/// corners a node holds received, `Σ weight[c] · factor[point[c]]` (a corner weighs a third of
+/// its element's area), into `row[0]`; summed over the nodes it is the row that
+/// [`row_scale`](crate::analysis::row_scale) closes. `count` is n, or -1 (`row` untouched) when
+/// `weight` is not n long, `row` is empty or a point is out of range.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+pub unsafe extern "C" fn corners_row(
+    point: *const i32,
+    point_len: Word,
+    weight: *const f64,
+    weight_len: Word,
+    factor: *const f32,
+    factor_len: Word,
+    row: *mut f64,
+    row_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (point, weight, factor, row) = unsafe {
+        (
+            array(point, point_len),
+            array(weight, weight_len),
+            array(factor, factor_len),
+            array_mut(row, row_len),
+        )
+    };
+    let valid = weight.len() == point.len()
+        && !row.is_empty()
+        && point
+            .iter()
+            .all(|&p| (0..factor.len() as i64).contains(&i64::from(p)));
+    let written = if valid {
+        row[0] = point
+            .iter()
+            .zip(weight)
+            .map(|(&p, &w)| w * f64::from(factor[p as usize]))
+            .sum();
+        point.len() as Word
+    } else {
+        -1
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
 #[cfg(test)]
 mod test {
     use super::*;
@@ -793,5 +841,51 @@ mod test {
         assert_eq!(receive(bad_patch, &factor, &rho, &mut r, &mut u), -1);
         assert_eq!(receive(corners, &factor, &rho, &mut r, &mut u[..8]), -1);
         assert!(r.iter().chain(&u).all(|&x| x == 7.0));
+    }
+
+    #[test]
+    fn corners_sum_the_row_they_received() {
+        type Row = unsafe extern "C" fn(
+            *const i32,
+            Word,
+            *const f64,
+            Word,
+            *const f32,
+            Word,
+            *mut f64,
+            Word,
+            *mut Word,
+        );
+        // SAFETY: the table says this is the signature.
+        let f: Row = unsafe { std::mem::transmute(entry("RAD.CORNERS.ROW")) };
+        let call = |point: &[i32], weight: &[f64], factor: &[f32], row: &mut [f64]| {
+            let mut count = 0;
+            // SAFETY: valid slices and result.
+            unsafe {
+                f(
+                    point.as_ptr(),
+                    point.len() as Word,
+                    weight.as_ptr(),
+                    weight.len() as Word,
+                    factor.as_ptr(),
+                    factor.len() as Word,
+                    row.as_mut_ptr(),
+                    row.len() as Word,
+                    &mut count,
+                )
+            };
+            count
+        };
+        let mut row = [7.0];
+        // 2 * 0.5 + 3 * 0 + 4 * 0.25
+        assert_eq!(
+            call(&[0, 1, 2], &[2.0, 3.0, 4.0], &[0.5, 0.0, 0.25], &mut row),
+            3
+        );
+        assert_eq!(row, [2.0]);
+        let mut row = [7.0];
+        assert_eq!(call(&[0, 3], &[1.0, 1.0], &[0.5, 0.0, 0.25], &mut row), -1);
+        assert_eq!(call(&[0], &[1.0, 1.0], &[0.5], &mut row), -1);
+        assert_eq!(row, [7.0]);
     }
 }

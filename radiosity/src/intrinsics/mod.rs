@@ -199,6 +199,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         result: None,
         addr: batch::corners_receive as *const u8,
     },
+    Intrinsic {
+        name: "RAD.CORNERS.ROW",
+        params: &[ValInts, ValReal64s, ValReal32s, VarReal64s, ResultInt],
+        result: None,
+        addr: batch::corners_row as *const u8,
+    },
 ];
 
 /// Floats per ray written by `RAD.SHADOW.RAYS`: origin (3), direction (3), tmin, tmax (the
