@@ -1,4 +1,4 @@
-//! The JIT: one `JITModule` (opt_level speed) with every [`ABI_TABLE`] entry and every intrinsic of
+//! The JIT: one `JITModule` (opt_level speed) with every runtime [`Entry`] and every intrinsic of
 //! the program's [`IntrinsicSet`] imported by name, and a
 //! pool of reusable `codegen::Context`/`FunctionBuilderContext` pairs (one per nesting level of
 //! functions being lowered at the same time), in the shape of cranelift-jit-demo's `jit.rs`.
@@ -10,7 +10,8 @@ use cranelift_codegen::settings::{self, Configurable};
 use cranelift_frontend::FunctionBuilderContext;
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{FuncId, Linkage, Module, default_libcall_names};
-use occ_runtime::abi::{ABI_TABLE, AbiType};
+use occ_runtime::abi::{AbiType, Entry};
+use occ_runtime::entries;
 use occ_runtime::intrinsic::{IntrinsicSet, MachineType};
 
 use crate::error::CodegenError;
@@ -28,8 +29,8 @@ pub struct FnContext {
 pub struct Jit {
     /// The JIT module that owns the generated code.
     pub module: JITModule,
-    /// Runtime entry name to its import.
-    pub imports: HashMap<&'static str, FuncId>,
+    /// The import of each runtime entry, indexed by [`Entry`].
+    imports: Vec<FuncId>,
     /// Intrinsic name to its import.
     pub intrinsics: HashMap<&'static str, FuncId>,
     /// Native predefine helper name to its import (see [`crate::native`]).
@@ -56,8 +57,8 @@ impl Jit {
             .map_err(cl_err)?;
         // Step 2: register the runtime's symbols by name.
         let mut jb = JITBuilder::with_isa(isa, default_libcall_names());
-        for e in ABI_TABLE {
-            jb.symbol(e.name, e.addr);
+        for &e in Entry::ALL {
+            jb.symbol(e.signature().name, entries::address(e));
         }
         for i in set.iter() {
             jb.symbol(intrinsic_symbol(i.name), i.addr);
@@ -67,17 +68,17 @@ impl Jit {
         }
         let mut module = JITModule::new(jb);
         // Step 3: declare the imports.
-        let mut imports = HashMap::new();
-        for e in ABI_TABLE {
+        let mut imports = Vec::with_capacity(Entry::ALL.len());
+        for &e in Entry::ALL {
+            let s = e.signature();
             let mut sig = module.make_signature();
             sig.params
-                .extend(e.params.iter().map(|p| AbiParam::new(abi_type(*p))));
-            sig.returns
-                .extend(e.ret.map(|r| AbiParam::new(abi_type(r))));
+                .extend(s.params.iter().map(|p| AbiParam::new(abi_type(*p))));
+            sig.returns.push(AbiParam::new(abi_type(s.ret)));
             let id = module
-                .declare_function(e.name, Linkage::Import, &sig)
+                .declare_function(s.name, Linkage::Import, &sig)
                 .map_err(cl_err)?;
-            imports.insert(e.name, id);
+            imports.push(id);
         }
         let mut intrinsics = HashMap::new();
         for i in set.iter() {
@@ -103,6 +104,11 @@ impl Jit {
             pool: Vec::new(),
             next_name: 0,
         })
+    }
+
+    /// The import of runtime entry `e`.
+    pub fn entry(&self, e: Entry) -> FuncId {
+        self.imports[e as usize]
     }
 
     /// The signature of every compiled PROC and PAR branch: `(ws, node) -> status`.

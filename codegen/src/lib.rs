@@ -25,7 +25,7 @@ use occ_compiler::CheckedProgram;
 use occ_compiler::types::Type;
 use occ_grammar::ast::{self, DeclKind};
 use occ_grammar::source_map::SourceMap;
-use occ_runtime::abi::{ProcFn, Word};
+use occ_runtime::abi::{self, ProcFn, Word};
 pub use occ_runtime::intrinsic::IntrinsicSet;
 use occ_runtime::program::ProcInfo;
 use occ_runtime::{HostIo, Node, NodeConfig, ProgramInfo, RunError, Stats};
@@ -197,17 +197,18 @@ impl Compiled {
     pub fn run(&self, config: NodeConfig, host: HostIo) -> (Result<(), RunError>, Stats) {
         let mut node = Node::new(config, self.info.clone(), host);
         let chans = node.host_channels();
-        let ws = match node.alloc_workspace(self.entry_words as usize + 2) {
-            Ok(ws) => ws,
-            Err(e) => return (Err(e), node.stats().clone()),
-        };
+        let ws =
+            match node.alloc_workspace(self.entry_words as usize + abi::frame::ENTRY_SPARE_WORDS) {
+                Ok(ws) => ws,
+                Err(e) => return (Err(e), node.stats().clone()),
+            };
         // SAFETY: `ws` has `entry_words` words above it and the header below; the parameter
         // offsets are inside the frame.
         unsafe {
-            *ws = 0;
-            *ws.add(1) = 0;
+            *ws.offset(abi::frame::STATIC_LINK) = 0;
+            *ws.offset(abi::frame::JOIN) = 0;
             for (off, ch) in self.entry_params.iter().zip(chans) {
-                *ws.add(*off as usize / 8) = ch as Word;
+                *ws.byte_offset(*off as isize) = ch as Word;
             }
             node.spawn(ws, self.entry);
         }

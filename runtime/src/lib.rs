@@ -1,8 +1,8 @@
 //! The process machine: T800-style workspaces, run queues, one-word channels, ALT, timers, PAR,
 //! runtime errors and deadlock detection; nodes, links and network transports.
 //!
-//! Compiled occam (from `occ-codegen`) is a set of [`abi::ProcFn`]s that call the entry points of
-//! [`abi::ABI_TABLE`]; [`abi`] states the whole contract. A [`Node`] runs them: its scheduler
+//! Compiled occam (from `occ-codegen`) is a set of [`abi::ProcFn`]s that call the runtime's
+//! [`abi::Entry`] points ([`entries`] gives their addresses); [`abi`] states the whole contract. A [`Node`] runs them: its scheduler
 //! ([`sched`]), channels ([`chan`]), ALT ([`alt`]), timers ([`timer`]), PAR ([`par`]), errors
 //! ([`error`]) and deadlock reports ([`deadlock`]). Nodes own all their state, so many run in one
 //! OS process; [`Network`] joins them with links, and [`Network::run_all`] (one thread per node)
@@ -82,6 +82,7 @@ pub mod alt;
 mod arena;
 pub mod chan;
 pub mod deadlock;
+pub mod entries;
 pub mod error;
 mod external;
 mod frame;

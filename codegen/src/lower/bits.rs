@@ -5,6 +5,7 @@
 use cranelift_codegen::ir::condcodes::{FloatCC, IntCC};
 use cranelift_codegen::ir::{InstBuilder, Value, types};
 use cranelift_module::Module;
+use occ_runtime::abi::word_offset;
 
 use super::{Tr, mem};
 use crate::native::{self, Arg, Helper, OUT_WORDS, Out};
@@ -72,7 +73,7 @@ impl Tr<'_, '_> {
             };
             args.push(x);
         }
-        let off = self.frame.alloc(8 * OUT_WORDS);
+        let off = self.frame.alloc_words(OUT_WORDS as usize);
         let buf = self.local_addr(off);
         args.push(buf);
         let id = self.cx.jit.natives[h.name];
@@ -86,7 +87,7 @@ impl Tr<'_, '_> {
                 Out::R32 => types::F32,
                 Out::R64 => types::F64,
             };
-            out.push(self.b.ins().load(ty, mem(), buf, 8 * k as i32));
+            out.push(self.b.ins().load(ty, mem(), buf, word_offset(k as isize)));
         }
         out
     }

@@ -5,6 +5,7 @@
 use cranelift_codegen::ir::{InstBuilder, Value, condcodes::FloatCC, types};
 use occ_grammar::ast::{Expr, Span};
 use occ_runtime::ErrorKind;
+use occ_runtime::abi::Entry;
 
 use super::{Res, Tr};
 
@@ -208,7 +209,7 @@ impl Tr<'_, '_> {
                 self.check(v, ErrorKind::Assert, span);
                 Ok(())
             }
-            ("RESCHEDULE", []) => self.blocking("rt_reschedule", &[self.node, self.ws], span),
+            ("RESCHEDULE", []) => self.blocking(Entry::Reschedule, &[self.node, self.ws], span),
             ("CAUSEERROR", []) => {
                 self.halt(ErrorKind::Stop, span);
                 let dead = self.b.create_block();
