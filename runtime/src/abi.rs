@@ -237,15 +237,15 @@ pub mod priority {
 ///
 /// A channel word is 0 (empty); `Wptr | pri` (a process waits with its data pointer in
 /// `POINTER`); `Wptr | TAG_ALT | pri` (an ALTing process has enabled it); or
-/// `endpoint | TAG_EXTERNAL` (a link or host endpoint stands behind the channel).
+/// `endpoint | TAG_ENDPOINT` (a link or host endpoint stands behind the channel).
 pub mod tag {
     use super::Word;
     /// Bit 0: the waiting process is low priority.
     pub const LOW: Word = 1;
     /// Bit 1: the waiting process is ALTing.
     pub const ALT: Word = 2;
-    /// Bit 2: the word points at an external endpoint, not a workspace.
-    pub const EXTERNAL: Word = 4;
+    /// Bit 2: the word points at an endpoint, not a workspace.
+    pub const ENDPOINT: Word = 4;
     /// All tag bits.
     pub const MASK: Word = 7;
 }

@@ -12,7 +12,7 @@
 //!
 //! [`ProgramInfo`] (shared by every node running the program) makes reports readable at no run-time
 //! cost: `locations` (the `location` argument of `rt_error` indexes it), and per compiled function
-//! a [`ProcInfo`] with its PROC name, its address, the location of each resume index (deadlock
+//! a [`CodeInfo`] with its PROC name, its address, the location of each resume index (deadlock
 //! reports show where a process is blocked) and the channels declared in its workspace (deadlock
 //! reports name the channel a process waits on, found in the frames of the blocked processes and
 //! their callers).
@@ -82,9 +82,9 @@ pub mod alt;
 mod arena;
 pub mod chan;
 pub mod deadlock;
+mod endpoint;
 pub mod entries;
 pub mod error;
-mod external;
 mod frame;
 pub mod host;
 pub mod intrinsic;
@@ -110,6 +110,6 @@ pub use host::HostIo;
 pub use link::{LinkStats, Network};
 pub use node::{Node, NodeConfig};
 pub use pool::PoolView;
-pub use program::{ChannelName, ProcInfo, ProgramInfo, SourceLoc};
+pub use program::{ChannelName, CodeInfo, ProgramInfo, SourceLoc};
 pub use sched::Idle;
 pub use stats::Stats;

@@ -6,7 +6,7 @@
 //! Fast path: an ALT whose guards are all unconditional inputs on channels first reads the
 //! channel words, in the order disabling would take them. The first holding a waiting outputter
 //! (a plain process word) is selected at once, with no enabling, waiting or disabling; an empty
-//! word is passed over; a word the poll cannot judge (an external endpoint, such as the keyboard
+//! word is passed over; a word the poll cannot judge (an endpoint, such as the keyboard
 //! or a link, which may hold data) sends the ALT to the protocol at once, so that it is never
 //! passed over for a later guard. A guard ready when the ALT starts may always be selected, so
 //! this changes no outcome the T800 protocol allows; when no guard is ready, the protocol runs.
@@ -145,7 +145,7 @@ impl Tr<'_, '_> {
 
     /// The fast path: reads each guard's channel word in disabling order and jumps to
     /// `selected` with the first ready guard's branch number, or to `protocol` at the first word
-    /// holding an external endpoint or an ALT tag; falls through when every word is empty.
+    /// holding an endpoint or an ALT tag; falls through when every word is empty.
     fn poll_ready(
         &mut self,
         groups: &[Group<'_>],
@@ -166,7 +166,7 @@ impl Tr<'_, '_> {
             let waiting = tr.b.ins().icmp_imm_u(IntCC::NotEqual, w, NOT_PROCESS);
             tr.b.ins().brif(waiting, occupied, &[], next, &[]);
             tr.b.switch_to_block(occupied);
-            let special = tr.b.ins().band_imm_u(w, tag::EXTERNAL | tag::ALT);
+            let special = tr.b.ins().band_imm_u(w, tag::ENDPOINT | tag::ALT);
             let plain = tr.b.ins().icmp_imm_u(IntCC::Equal, special, 0);
             let branch = tr.iconst((gi as i64) << 32);
             tr.b.ins()

@@ -100,7 +100,7 @@ impl Tr<'_, '_> {
     /// its `POINTER`, empty the word, count the communication, put the partner at the back of
     /// its run queue and carry on (through `rt_preempt` when a low-priority process must give
     /// way), exactly what `rt_in`/`rt_out` do for this case but with no call. Every other case
-    /// (first to arrive, an ALTing reader, an external endpoint, another priority) calls
+    /// (first to arrive, an ALTing reader, an endpoint, another priority) calls
     /// `rt_in`/`rt_out`.
     fn communicate(
         &mut self,
@@ -126,7 +126,7 @@ impl Tr<'_, '_> {
             self.b.create_block(),
         );
         let w = self.b.ins().load(types::I64, mem(), chan, 0);
-        let special = self.b.ins().band_imm_u(w, tag::EXTERNAL | tag::ALT);
+        let special = self.b.ins().band_imm_u(w, tag::ENDPOINT | tag::ALT);
         let plain = self.b.ins().icmp_imm_u(IntCC::Equal, special, 0);
         let waiting = self.b.ins().icmp_imm_u(IntCC::NotEqual, w, NOT_PROCESS);
         let p = self.b.ins().band_imm_u(w, tag::LOW);

@@ -131,7 +131,7 @@ pub struct Compiler<'p> {
     pub funcs: Vec<(FuncId, String, Vec<u32>, Vec<ChannelName>)>,
     /// The name of the PROC being compiled (PAR branches report it).
     pub proc_name: String,
-    /// Each `#PRAGMA EXTERNAL` routine's intrinsic (see [`crate::link`]).
+    /// Each `#PRAGMA EXTERNAL` routine's intrinsic (see [`crate::bind`]).
     pub externals: HashMap<SymbolId, &'static occ_runtime::intrinsic::Intrinsic>,
     /// The network layout, once the `PLACED PAR` is compiled.
     pub network: Option<crate::network::NetworkLayout>,
@@ -140,14 +140,14 @@ pub struct Compiler<'p> {
 
 impl<'p> Compiler<'p> {
     /// Starts compiling `checked` (spans mapped through `map`) with the intrinsics of `set`;
-    /// fails with every EXTERNAL that cannot be bound (see [`crate::link`]).
+    /// fails with every EXTERNAL that cannot be bound (see [`crate::bind`]).
     pub fn new(
         checked: &'p CheckedProgram,
         map: &'p SourceMap,
         set: &occ_runtime::intrinsic::IntrinsicSet,
     ) -> Res<Compiler<'p>> {
         let decl_syms = checked.symbols.iter().map(|(id, s)| (s.span, id)).collect();
-        let bindings = crate::link::bind_externals(checked, set);
+        let bindings = crate::bind::bind_externals(checked, set);
         if !bindings.errors.is_empty() {
             return Err(CodegenError::Link(bindings.errors));
         }
