@@ -15,7 +15,6 @@ pub mod frame;
 pub mod jit;
 pub mod layout;
 pub mod lower;
-pub mod native;
 pub mod network;
 mod spread;
 

@@ -92,6 +92,7 @@ pub mod link;
 mod mailbox;
 #[cfg(feature = "mpi")]
 pub mod mpi;
+pub mod native;
 pub mod node;
 pub mod par;
 pub mod placement;

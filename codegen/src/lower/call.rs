@@ -93,12 +93,12 @@ impl Tr<'_, '_> {
                     self.call_intrinsic(i, args, span)?;
                     return Ok(());
                 }
+                if let SymbolKind::Predefined(p) = &self.cx.checked.symbols[sym].kind {
+                    return self.predefined_proc(p, args, span);
+                }
                 if let Some(i) = intrinsic::intrinsic(&name.text) {
                     self.call_intrinsic(i, args, span)?;
                     return Ok(());
-                }
-                if let SymbolKind::Predefined(p) = &self.cx.checked.symbols[sym].kind {
-                    return self.predefined_proc(p.name, args, span);
                 }
                 return Err(self
                     .cx
@@ -184,15 +184,15 @@ impl Tr<'_, '_> {
         if let Some(i) = self.cx.externals.get(&sym).copied() {
             return self.call_intrinsic(i, args, span);
         }
+        if let SymbolKind::Predefined(p) = &self.cx.checked.symbols[sym].kind {
+            return self.predefined_function(p, args, span);
+        }
         if let Some(i) = intrinsic::intrinsic(&name.text) {
             return self.call_intrinsic(i, args, span);
         }
         let d = match self.cx.env.get(&sym) {
             Some(Storage::Function(d)) => d.clone(),
             _ => {
-                if let SymbolKind::Predefined(p) = &self.cx.checked.symbols[sym].kind {
-                    return self.predefined_function(p.name, args, span);
-                }
                 // A conversion to a named type written `T (x)`.
                 if let SymbolKind::DataType(id) = &self.cx.checked.symbols[sym].kind
                     && args.len() == 1
@@ -341,7 +341,7 @@ impl Tr<'_, '_> {
 
     /// Calls a native intrinsic with occam actuals (arrays by address and length, written
     /// scalars through a word temporary copied back after the call).
-    fn call_intrinsic(
+    pub fn call_intrinsic(
         &mut self,
         i: &'static intrinsic::Intrinsic,
         args: &[Expr],
@@ -358,7 +358,10 @@ impl Tr<'_, '_> {
                     vals.push(self.widen_i64(v, a));
                 }
                 ParamKind::ValReal32 | ParamKind::ValReal64 => vals.push(self.expr(a)?),
-                ParamKind::ResultInt | ParamKind::ResultReal32 | ParamKind::ResultBool => {
+                ParamKind::ResultInt
+                | ParamKind::ResultReal32
+                | ParamKind::ResultReal64
+                | ParamKind::ResultBool => {
                     // The intrinsic reads and writes a temporary word holding the variable's
                     // value (so a reference `INT x` is in/out); it is copied back below.
                     let off = self.frame.alloc_word();
@@ -367,7 +370,7 @@ impl Tr<'_, '_> {
                     self.b.ins().store(mem(), zero, t, 0);
                     let v = self.expr(a)?;
                     let v = match k {
-                        ParamKind::ResultReal32 => v,
+                        ParamKind::ResultReal32 | ParamKind::ResultReal64 => v,
                         _ => self.widen_i64(v, a),
                     };
                     self.b.ins().store(mem(), v, t, 0);
@@ -409,6 +412,7 @@ impl Tr<'_, '_> {
                     Some(self.b.ins().ireduce(types::I8, w))
                 }
                 ParamKind::ResultReal32 => Some(self.b.ins().load(types::F32, mem(), vals[vi], 0)),
+                ParamKind::ResultReal64 => Some(self.b.ins().load(types::F64, mem(), vals[vi], 0)),
                 _ => None,
             };
             if let Some(v) = v {
