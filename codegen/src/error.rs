@@ -27,7 +27,7 @@ pub enum CodegenError {
         what: String,
     },
     /// Occurs when `#PRAGMA EXTERNAL` routines are called but no linked intrinsic table has
-    /// them, or when their occam signatures disagree with the table's (see `crate::link`):
+    /// them, or when their occam signatures disagree with the table's (see `crate::bind`):
     /// every such problem, in source order.
     #[error("{}", .0.iter().map(|d| d.message.as_str()).collect::<Vec<_>>().join("; "))]
     Link(Vec<Diagnostic>),

@@ -1,7 +1,8 @@
-//! The JIT: one `JITModule` (opt_level speed) with every [`ABI_TABLE`] entry and every intrinsic of
-//! the program's [`IntrinsicSet`] imported by name, and a
-//! pool of reusable `codegen::Context`/`FunctionBuilderContext` pairs (one per nesting level of
-//! functions being lowered at the same time), in the shape of cranelift-jit-demo's `jit.rs`.
+//! The JIT: one `JITModule` (opt_level speed) with every native function of
+//! [`occ_runtime::native::natives`] (the runtime entries, the predefine intrinsics and the
+//! program's [`IntrinsicSet`]) imported, and a pool of reusable
+//! `codegen::Context`/`FunctionBuilderContext` pairs (one per nesting level of functions being
+//! lowered at the same time), in the shape of cranelift-jit-demo's `jit.rs`.
 
 use std::collections::HashMap;
 
@@ -10,11 +11,11 @@ use cranelift_codegen::settings::{self, Configurable};
 use cranelift_frontend::FunctionBuilderContext;
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{FuncId, Linkage, Module, default_libcall_names};
-use occ_runtime::abi::{ABI_TABLE, AbiType};
+use occ_runtime::abi::Entry;
 use occ_runtime::intrinsic::{IntrinsicSet, MachineType};
+use occ_runtime::native::{Native, natives};
 
 use crate::error::CodegenError;
-use crate::native;
 
 /// A context pair reused between functions.
 pub struct FnContext {
@@ -28,12 +29,10 @@ pub struct FnContext {
 pub struct Jit {
     /// The JIT module that owns the generated code.
     pub module: JITModule,
-    /// Runtime entry name to its import.
-    pub imports: HashMap<&'static str, FuncId>,
-    /// Intrinsic name to its import.
+    /// The import of each runtime entry, indexed by [`Entry`].
+    imports: Vec<FuncId>,
+    /// Intrinsic name to its import (the program's intrinsics and the predefine intrinsics).
     pub intrinsics: HashMap<&'static str, FuncId>,
-    /// Native predefine helper name to its import (see [`crate::native`]).
-    pub natives: HashMap<&'static str, FuncId>,
     pool: Vec<FnContext>,
     next_name: u32,
 }
@@ -54,55 +53,43 @@ impl Jit {
             .map_err(cl_err)?
             .finish(settings::Flags::new(flags))
             .map_err(cl_err)?;
-        // Step 2: register the runtime's symbols by name.
+        // Step 2: register every native function's symbol, then declare each as an import.
+        let natives: Vec<_> = natives(set).collect();
         let mut jb = JITBuilder::with_isa(isa, default_libcall_names());
-        for e in ABI_TABLE {
-            jb.symbol(e.name, e.addr);
-        }
-        for i in set.iter() {
-            jb.symbol(intrinsic_symbol(i.name), i.addr);
-        }
-        for h in native::HELPERS {
-            jb.symbol(native::symbol(h.name), h.addr);
+        for f in &natives {
+            jb.symbol(&f.symbol, f.addr);
         }
         let mut module = JITModule::new(jb);
-        // Step 3: declare the imports.
-        let mut imports = HashMap::new();
-        for e in ABI_TABLE {
+        let mut imports = Vec::with_capacity(Entry::ALL.len());
+        let mut intrinsics = HashMap::new();
+        for f in &natives {
             let mut sig = module.make_signature();
             sig.params
-                .extend(e.params.iter().map(|p| AbiParam::new(abi_type(*p))));
+                .extend(f.params.iter().map(|m| AbiParam::new(machine_type(*m))));
             sig.returns
-                .extend(e.ret.map(|r| AbiParam::new(abi_type(r))));
+                .extend(f.result.map(|r| AbiParam::new(machine_type(r))));
             let id = module
-                .declare_function(e.name, Linkage::Import, &sig)
+                .declare_function(&f.symbol, Linkage::Import, &sig)
                 .map_err(cl_err)?;
-            imports.insert(e.name, id);
+            match f.native {
+                Native::Entry(_) => imports.push(id),
+                Native::Intrinsic(i) => {
+                    intrinsics.insert(i.name, id);
+                }
+            }
         }
-        let mut intrinsics = HashMap::new();
-        for i in set.iter() {
-            let mut sig = module.make_signature();
-            sig.params.extend(
-                i.machine_params()
-                    .iter()
-                    .map(|m| AbiParam::new(machine_type(*m))),
-            );
-            sig.returns
-                .extend(i.result.map(|r| AbiParam::new(machine_type(r))));
-            let id = module
-                .declare_function(&intrinsic_symbol(i.name), Linkage::Import, &sig)
-                .map_err(cl_err)?;
-            intrinsics.insert(i.name, id);
-        }
-        let natives = declare_natives(&mut module)?;
         Ok(Jit {
             module,
             imports,
             intrinsics,
-            natives,
             pool: Vec::new(),
             next_name: 0,
         })
+    }
+
+    /// The import of runtime entry `e`.
+    pub fn entry(&self, e: Entry) -> FuncId {
+        self.imports[e as usize]
     }
 
     /// The signature of every compiled PROC and PAR branch: `(ws, node) -> status`.
@@ -156,35 +143,6 @@ impl Jit {
     pub fn finalize(&mut self) -> Result<(), CodegenError> {
         self.module.finalize_definitions().map_err(cl_err)
     }
-}
-
-/// Declares every native predefine helper: its arguments, then the output pointer.
-fn declare_natives(module: &mut JITModule) -> Result<HashMap<&'static str, FuncId>, CodegenError> {
-    let mut natives = HashMap::new();
-    for h in native::HELPERS {
-        let mut sig = module.make_signature();
-        sig.params.extend(h.args.iter().map(|a| {
-            AbiParam::new(match a {
-                native::Arg::Int => types::I64,
-                native::Arg::R32 => types::F32,
-                native::Arg::R64 => types::F64,
-            })
-        }));
-        sig.params.push(AbiParam::new(types::I64));
-        let id = module
-            .declare_function(&native::symbol(h.name), Linkage::Import, &sig)
-            .map_err(cl_err)?;
-        natives.insert(h.name, id);
-    }
-    Ok(natives)
-}
-
-fn intrinsic_symbol(name: &str) -> String {
-    format!("occ_intrinsic_{}", name.replace('.', "_"))
-}
-
-fn abi_type(_t: AbiType) -> types::Type {
-    types::I64
 }
 
 /// The Cranelift type of an intrinsic argument or result.

@@ -9,7 +9,7 @@ use cranelift_codegen::ir::types;
 use occ_compiler::types::{Prim, Type, TypeTable, bytes_in};
 
 /// Bytes of a runtime word.
-pub const WORD: i64 = 8;
+pub const WORD: i64 = occ_runtime::abi::WORD_BYTES as i64;
 
 /// The Cranelift type that holds a value of primitive type `p` (BOOL is 0 or 1 in an `i8`).
 pub fn cl_type(p: Prim) -> types::Type {

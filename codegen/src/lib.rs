@@ -9,13 +9,12 @@
 
 #![deny(missing_docs)]
 
+pub mod bind;
 pub mod error;
 pub mod frame;
 pub mod jit;
 pub mod layout;
-pub mod link;
 pub mod lower;
-pub mod native;
 pub mod network;
 mod spread;
 
@@ -25,9 +24,9 @@ use occ_compiler::CheckedProgram;
 use occ_compiler::types::Type;
 use occ_grammar::ast::{self, DeclKind};
 use occ_grammar::source_map::SourceMap;
-use occ_runtime::abi::{ProcFn, Word};
+use occ_runtime::abi::{self, ProcFn, Word};
 pub use occ_runtime::intrinsic::IntrinsicSet;
-use occ_runtime::program::ProcInfo;
+use occ_runtime::program::CodeInfo;
 use occ_runtime::{HostIo, Node, NodeConfig, ProgramInfo, RunError, Stats};
 
 pub use error::CodegenError;
@@ -64,7 +63,7 @@ impl Drop for Compiled {
 
 /// The whole front end, IO-free: preprocesses, parses and checks the file `path` whose text is
 /// `text` ([`occ_compiler::check_source`]), then binds its `#PRAGMA EXTERNAL` routines to
-/// `intrinsics` ([`link::bind_externals`]), so that a program that passes can be compiled with
+/// `intrinsics` ([`bind::bind_externals`]), so that a program that passes can be compiled with
 /// [`compile_with`] and the same set. `occ check`, `occ run`, `occ test`, the tests and the
 /// benchmarks all start here.
 pub fn front_end(
@@ -75,7 +74,7 @@ pub fn front_end(
 ) -> occ_compiler::Front {
     let mut front = occ_compiler::check_source(path, text, loader);
     if let Some(checked) = &front.checked {
-        let bindings = link::bind_externals(checked, intrinsics);
+        let bindings = bind::bind_externals(checked, intrinsics);
         if !bindings.errors.is_empty() {
             front.diagnostics.extend(bindings.errors);
             front.checked = None;
@@ -95,7 +94,7 @@ pub fn compile(
 }
 
 /// Compiles `program` (checked as `checked`, spans mapped by `map`), binding its
-/// `#PRAGMA EXTERNAL` routines to the intrinsics of `intrinsics` ([`link`]); the entry point is
+/// `#PRAGMA EXTERNAL` routines to the intrinsics of `intrinsics` ([`bind`]); the entry point is
 /// its last top-level PROC, which must take up to three `CHAN BYTE` parameters (keyboard,
 /// screen, error).
 pub fn compile_with(
@@ -152,7 +151,7 @@ pub fn compile_with(
         let code = cx.jit.module.get_finalized_function(*id);
         // SAFETY: every compiled function has the ProcFn signature.
         let f: ProcFn = unsafe { std::mem::transmute::<*const u8, ProcFn>(code) };
-        let mut p = ProcInfo::new(pname, f);
+        let mut p = CodeInfo::new(pname, f);
         p.resume_locations = resumes.clone();
         p.channels = channels.clone();
         info.procs.push(p);
@@ -197,17 +196,18 @@ impl Compiled {
     pub fn run(&self, config: NodeConfig, host: HostIo) -> (Result<(), RunError>, Stats) {
         let mut node = Node::new(config, self.info.clone(), host);
         let chans = node.host_channels();
-        let ws = match node.alloc_workspace(self.entry_words as usize + 2) {
-            Ok(ws) => ws,
-            Err(e) => return (Err(e), node.stats().clone()),
-        };
+        let ws =
+            match node.alloc_workspace(self.entry_words as usize + abi::frame::ENTRY_SPARE_WORDS) {
+                Ok(ws) => ws,
+                Err(e) => return (Err(e), node.stats().clone()),
+            };
         // SAFETY: `ws` has `entry_words` words above it and the header below; the parameter
         // offsets are inside the frame.
         unsafe {
-            *ws = 0;
-            *ws.add(1) = 0;
+            *ws.offset(abi::frame::STATIC_LINK) = 0;
+            *ws.offset(abi::frame::JOIN) = 0;
             for (off, ch) in self.entry_params.iter().zip(chans) {
-                *ws.add(*off as usize / 8) = ch as Word;
+                *ws.byte_offset(*off as isize) = ch as Word;
             }
             node.spawn(ws, self.entry);
         }

@@ -17,7 +17,7 @@ use cranelift_frontend::Switch;
 use occ_compiler::checked::SymbolId;
 use occ_compiler::types::{ChanProtocol, Prim, ProtocolItem, Type};
 use occ_grammar::ast::{Process, Span};
-use occ_runtime::abi::{Word, Wptr};
+use occ_runtime::abi::{self, Entry, WORD_BYTES, Word, Wptr};
 use occ_runtime::placement::Placement;
 use occ_runtime::remote::{Spread, Transport};
 use occ_runtime::topology::{LINKS, Shape};
@@ -50,7 +50,7 @@ impl Tr<'_, '_> {
         for b in &net.branches {
             for &r in &b.replicators {
                 if !slots.iter().any(|(s, _)| *s == r) {
-                    let off = self.frame.alloc(8);
+                    let off = self.frame.alloc_word();
                     slots.push((r, off));
                     self.cx.env.insert(
                         r,
@@ -86,7 +86,7 @@ impl Tr<'_, '_> {
         for l in &net.links {
             let offset = match self.cx.env.get(&l.channel) {
                 Some(Storage::Var { depth, offset }) if *depth == self.depth => {
-                    offset + 8 * l.element as i32
+                    offset + WORD_BYTES * l.element as i32
                 }
                 _ => {
                     let span = self.cx.checked.symbols[l.channel].span;
@@ -101,7 +101,7 @@ impl Tr<'_, '_> {
             .map(|b| (b.span, occ_compiler::network::processor_body(p, b.span)))
             .collect();
         self.cx.network = Some(NetworkLayout { processors, links });
-        let k = self.call_rt("rt_placement", &[self.node, self.ws]);
+        let k = self.call_rt(Entry::Placement, &[self.node, self.ws]);
         let done = self.b.create_block();
         let none = self.b.create_block();
         let mut sw = Switch::new();
@@ -316,7 +316,7 @@ impl Built {
             if !self.is_local(i) {
                 continue;
             }
-            let words = c.entry_words as usize + 2;
+            let words = c.entry_words as usize + abi::frame::ENTRY_SPARE_WORDS;
             let ws = match self.nodes[i].alloc_workspace(words) {
                 Ok(ws) => ws,
                 Err(e) => {
@@ -327,8 +327,8 @@ impl Built {
             // SAFETY: a fresh frame of `entry_words` words; its first two words are the static
             // link and the join word, zero for a process root.
             unsafe {
-                *ws = 0;
-                *ws.add(1) = 0;
+                *ws.offset(abi::frame::STATIC_LINK) = 0;
+                *ws.offset(abi::frame::JOIN) = 0;
             }
             if let Err(e) = frame(&mut self, i, ws) {
                 *failed = Some(e);
@@ -491,7 +491,7 @@ impl Compiled {
             // The link channel words live in their own workspace on the node.
             let arr = b.nodes[i].alloc_workspace(2 * LINKS)?;
             let chans = b.host_channels(i);
-            // SAFETY: `arr` has 8 words; the parameter slots are inside the entry frame (array
+            // SAFETY: `arr` has `2 * LINKS` words; the parameter slots are inside the entry frame (array
             // parameters are an address word followed by a length word).
             unsafe {
                 for (k, w) in words[i].iter().enumerate() {
@@ -501,9 +501,9 @@ impl Compiled {
                 put(slots.id, i as Word);
                 put(slots.nodes, n as Word);
                 put(slots.links_in, arr as Word);
-                put(slots.links_in + 8, LINKS as Word);
+                put(slots.links_in + WORD_BYTES, LINKS as Word);
                 put(slots.links_out, arr.add(LINKS) as Word);
-                put(slots.links_out + 8, LINKS as Word);
+                put(slots.links_out + WORD_BYTES, LINKS as Word);
                 for (off, ch) in slots.host.iter().zip(chans) {
                     put(*off, ch as Word);
                 }

@@ -158,11 +158,12 @@ struct Reader<'a> {
 
 impl Reader<'_> {
     fn u64(&mut self) -> u64 {
+        const N: usize = std::mem::size_of::<u64>();
         let v = self
             .b
-            .get(self.at..self.at + 8)
-            .map_or(0, |s| u64::from_le_bytes(s.try_into().unwrap_or([0; 8])));
-        self.at += 8;
+            .get(self.at..self.at + N)
+            .map_or(0, |s| u64::from_le_bytes(s.try_into().unwrap_or([0; N])));
+        self.at += N;
         v
     }
 

@@ -1,72 +1,9 @@
-//! The IEEE, transputer-arithmetic and bit predefines: the native helpers called directly, and
-//! occam programs that use them end to end.
+//! The IEEE, transputer-arithmetic and bit predefines: occam programs that use them end to end
+//! (the runtime's tests call its predefine intrinsics directly).
 
 mod common;
 
 use common::run;
-use occ_codegen::native;
-
-/// Calls helper `name` with the given argument words (INTs only) and returns its output words.
-fn call_ints(name: &str, args: &[i64]) -> [u64; 3] {
-    let h = native::helper(name).expect("helper");
-    let mut out = [0u64; 3];
-    let p = out.as_mut_ptr();
-    // SAFETY: the table says these helpers take `args.len()` i64s and the output pointer.
-    unsafe {
-        match args {
-            [a] => std::mem::transmute::<*const u8, extern "C" fn(i64, *mut u64)>(h.addr)(*a, p),
-            [a, b] => std::mem::transmute::<*const u8, extern "C" fn(i64, i64, *mut u64)>(h.addr)(
-                *a, *b, p,
-            ),
-            [a, b, c] => std::mem::transmute::<*const u8, extern "C" fn(i64, i64, i64, *mut u64)>(
-                h.addr,
-            )(*a, *b, *c, p),
-            _ => panic!("arity"),
-        }
-    }
-    out
-}
-
-#[test]
-fn unpacksn_and_roundsn_match_the_inmos_examples() {
-    assert_eq!(
-        call_ints("UNPACKSN", &[0x4049_0FDB]),
-        [0xC90F_DB00, 0x80, 1]
-    );
-    assert_eq!(call_ints("UNPACKSN", &[1]), [0x100, 1, 1]);
-    assert_eq!(
-        call_ints("UNPACKSN", &[0x7FC0_0001]),
-        [0x4000_0100, 0xFF, 3]
-    );
-    assert_eq!(call_ints("UNPACKSN", &[0x7F80_0000])[2], 2);
-    assert_eq!(call_ints("UNPACKSN", &[0])[2], 0);
-    let r = |e, f: u32, g| call_ints("ROUNDSN", &[e, f as i32 as i64, g])[0];
-    assert_eq!(r(0x80, 0xC90F_DB00, 0), 0x4049_0FDB);
-    assert_eq!(r(0x80, 0xC90F_DB80, 0), 0x4049_0FDC);
-    assert_eq!(r(0x80, 0xC90F_DA80, 0), 0x4049_0FDA);
-    assert_eq!(r(0x80, 0xC90F_DA80, 0x3000), 0x4049_0FDB);
-    assert_eq!(r(1, 0x100, 0), 1);
-}
-
-#[test]
-fn fracmul_rounds_like_the_transputer() {
-    let f = |x: i64, y: i64| call_ints("FRACMUL", &[x, y])[0] as u32 as i32;
-    assert_eq!(f(1 << 30, 1 << 30), 1 << 29); // 0.5 * 0.5
-    assert_eq!(f(-(1 << 30), 1 << 30), -(1 << 29));
-    assert_eq!(f(1, 1), 0); // 2^-62 rounds to 0
-    assert_eq!(f(0x4000_0000, 3), 2); // 1.5 ulp: ties to even
-}
-
-#[test]
-fn crc_word_and_byte() {
-    // Shifting in zero data with a zero CRC gives zero; a set top bit feeds the generator.
-    assert_eq!(call_ints("CRCWORD", &[0, 0, 0x1021])[0], 0);
-    assert_eq!(
-        call_ints("CRCBYTE", &[0, i32::MIN as i64, 0x1021])[0],
-        0x1021 << 7
-    );
-    assert_eq!(call_ints("CRCWORD", &[1, 0, 0x1021])[0], 1);
-}
 
 /// Runs an occam body that prints with `out.int`/`out.string` and returns its output.
 fn occam(body: &str) -> String {

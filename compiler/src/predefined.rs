@@ -29,9 +29,159 @@ impl PType {
     }
 }
 
+/// Which predefined routine a [`Predefined`] is: the code generator matches on it (exhaustively),
+/// so a routine added to [`PREDEFINED`] must be given a lowering.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PredefinedId {
+    /// `LONGADD`.
+    LongAdd,
+    /// `LONGSUB`.
+    LongSub,
+    /// `ASHIFTLEFT`.
+    AShiftLeft,
+    /// `ASHIFTRIGHT`.
+    AShiftRight,
+    /// `ROTATELEFT`.
+    RotateLeft,
+    /// `ROTATERIGHT`.
+    RotateRight,
+    /// `LONGSUM`.
+    LongSum,
+    /// `LONGDIFF`.
+    LongDiff,
+    /// `LONGPROD`.
+    LongProd,
+    /// `LONGDIV`.
+    LongDiv,
+    /// `SHIFTLEFT`.
+    ShiftLeft,
+    /// `SHIFTRIGHT`.
+    ShiftRight,
+    /// `NORMALISE`.
+    Normalise,
+    /// `FRACMUL`.
+    FracMul,
+    /// `UNPACKSN`.
+    UnpackSn,
+    /// `ROUNDSN`.
+    RoundSn,
+    /// `ABS`.
+    Abs,
+    /// `DABS`.
+    DAbs,
+    /// `SQRT`.
+    Sqrt,
+    /// `DSQRT`.
+    DSqrt,
+    /// `ISNAN`.
+    IsNan,
+    /// `DISNAN`.
+    DIsNan,
+    /// `NOTFINITE`.
+    NotFinite,
+    /// `DNOTFINITE`.
+    DNotFinite,
+    /// `ORDERED`.
+    Ordered,
+    /// `DORDERED`.
+    DOrdered,
+    /// `MULBY2`.
+    MulBy2,
+    /// `DMULBY2`.
+    DMulBy2,
+    /// `DIVBY2`.
+    DivBy2,
+    /// `DDIVBY2`.
+    DDivBy2,
+    /// `LOGB`.
+    LogB,
+    /// `DLOGB`.
+    DLogB,
+    /// `SCALEB`.
+    ScaleB,
+    /// `DSCALEB`.
+    DScaleB,
+    /// `COPYSIGN`.
+    CopySign,
+    /// `DCOPYSIGN`.
+    DCopySign,
+    /// `NEXTAFTER`.
+    NextAfter,
+    /// `DNEXTAFTER`.
+    DNextAfter,
+    /// `MINUSX`.
+    MinusX,
+    /// `DMINUSX`.
+    DMinusX,
+    /// `FLOATING.UNPACK`.
+    FloatingUnpack,
+    /// `DFLOATING.UNPACK`.
+    DFloatingUnpack,
+    /// `ARGUMENT.REDUCE`.
+    ArgumentReduce,
+    /// `DARGUMENT.REDUCE`.
+    DArgumentReduce,
+    /// `REAL32OP`.
+    Real32Op,
+    /// `REAL64OP`.
+    Real64Op,
+    /// `IEEE32OP`.
+    Ieee32Op,
+    /// `IEEE64OP`.
+    Ieee64Op,
+    /// `REAL32REM`.
+    Real32Rem,
+    /// `REAL64REM`.
+    Real64Rem,
+    /// `IEEE32REM`.
+    Ieee32Rem,
+    /// `IEEE64REM`.
+    Ieee64Rem,
+    /// `REAL32EQ`.
+    Real32Eq,
+    /// `REAL64EQ`.
+    Real64Eq,
+    /// `REAL32GT`.
+    Real32Gt,
+    /// `REAL64GT`.
+    Real64Gt,
+    /// `IEEECOMPARE`.
+    IeeeCompare,
+    /// `DIEEECOMPARE`.
+    DIeeeCompare,
+    /// `FPINT`.
+    FpInt,
+    /// `DFPINT`.
+    DFpInt,
+    /// `BITCOUNT`.
+    BitCount,
+    /// `BITREVWORD`.
+    BitRevWord,
+    /// `BITREVNBITS`.
+    BitRevNBits,
+    /// `CRCWORD`.
+    CrcWord,
+    /// `CRCBYTE`.
+    CrcByte,
+    /// `ASSERT`.
+    Assert,
+    /// `RESCHEDULE`.
+    Reschedule,
+    /// `CAUSEERROR`.
+    CauseError,
+    /// `MOVE2D`.
+    Move2D,
+    /// `DRAW2D`.
+    Draw2D,
+    /// `CLIP2D`.
+    Clip2D,
+}
+
 /// A predefined routine's signature.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Predefined {
+    /// Which routine it is.
+    pub id: PredefinedId,
     /// The name as occam spells it.
     pub name: &'static str,
     /// The result types; empty for a PROC.
@@ -48,6 +198,7 @@ impl Predefined {
 }
 
 use PType::{Open2, P};
+use PredefinedId as Id;
 use Prim::{Bool as B, Byte as Y, Int as I, Int32 as I32, Real32 as R, Real64 as D};
 
 const V: bool = false;
@@ -64,11 +215,13 @@ const RI: &[(bool, PType)] = &[(V, P(R)), (V, P(I))];
 const DI: &[(bool, PType)] = &[(V, P(D)), (V, P(I))];
 
 const fn f(
+    id: PredefinedId,
     name: &'static str,
     results: &'static [Prim],
     params: &'static [(bool, PType)],
 ) -> Predefined {
     Predefined {
+        id,
         name,
         results,
         params,
@@ -78,87 +231,100 @@ const fn f(
 /// Every predefined routine.
 pub const PREDEFINED: &[Predefined] = &[
     // Integer and long arithmetic.
-    f("LONGADD", &[I], I3),
-    f("LONGSUB", &[I], I3),
-    f("ASHIFTLEFT", &[I], I2),
-    f("ASHIFTRIGHT", &[I], I2),
-    f("ROTATELEFT", &[I], I2),
-    f("ROTATERIGHT", &[I], I2),
-    f("LONGSUM", &[I, I], I3),
-    f("LONGDIFF", &[I, I], I3),
-    f("LONGPROD", &[I, I], I3),
-    f("LONGDIV", &[I, I], I3),
-    f("SHIFTLEFT", &[I, I], I3),
-    f("SHIFTRIGHT", &[I, I], I3),
-    f("NORMALISE", &[I, I, I], I2),
-    f("FRACMUL", &[I], I2),
-    f("UNPACKSN", &[I, I, I], I1),
-    f("ROUNDSN", &[I], I3),
+    f(Id::LongAdd, "LONGADD", &[I], I3),
+    f(Id::LongSub, "LONGSUB", &[I], I3),
+    f(Id::AShiftLeft, "ASHIFTLEFT", &[I], I2),
+    f(Id::AShiftRight, "ASHIFTRIGHT", &[I], I2),
+    f(Id::RotateLeft, "ROTATELEFT", &[I], I2),
+    f(Id::RotateRight, "ROTATERIGHT", &[I], I2),
+    f(Id::LongSum, "LONGSUM", &[I, I], I3),
+    f(Id::LongDiff, "LONGDIFF", &[I, I], I3),
+    f(Id::LongProd, "LONGPROD", &[I, I], I3),
+    f(Id::LongDiv, "LONGDIV", &[I, I], I3),
+    f(Id::ShiftLeft, "SHIFTLEFT", &[I, I], I3),
+    f(Id::ShiftRight, "SHIFTRIGHT", &[I, I], I3),
+    f(Id::Normalise, "NORMALISE", &[I, I, I], I2),
+    f(Id::FracMul, "FRACMUL", &[I], I2),
+    f(Id::UnpackSn, "UNPACKSN", &[I, I, I], I1),
+    f(Id::RoundSn, "ROUNDSN", &[I], I3),
     // REAL32 / REAL64 arithmetic support.
-    f("ABS", &[R], R1),
-    f("DABS", &[D], D1),
-    f("SQRT", &[R], R1),
-    f("DSQRT", &[D], D1),
-    f("ISNAN", &[B], R1),
-    f("DISNAN", &[B], D1),
-    f("NOTFINITE", &[B], R1),
-    f("DNOTFINITE", &[B], D1),
-    f("ORDERED", &[B], R2),
-    f("DORDERED", &[B], D2),
-    f("MULBY2", &[R], R1),
-    f("DMULBY2", &[D], D1),
-    f("DIVBY2", &[R], R1),
-    f("DDIVBY2", &[D], D1),
-    f("LOGB", &[R], R1),
-    f("DLOGB", &[D], D1),
-    f("SCALEB", &[R], RI),
-    f("DSCALEB", &[D], DI),
-    f("COPYSIGN", &[R], R2),
-    f("DCOPYSIGN", &[D], D2),
-    f("NEXTAFTER", &[R], R2),
-    f("DNEXTAFTER", &[D], D2),
-    f("MINUSX", &[R], R1),
-    f("DMINUSX", &[D], D1),
-    f("FLOATING.UNPACK", &[I, R], R1),
-    f("DFLOATING.UNPACK", &[I, D], D1),
-    f("ARGUMENT.REDUCE", &[B, I32, R], R3),
-    f("DARGUMENT.REDUCE", &[B, I32, D], D3),
-    f("REAL32OP", &[R], &[(V, P(R)), (V, P(I)), (V, P(R))]),
-    f("REAL64OP", &[D], &[(V, P(D)), (V, P(I)), (V, P(D))]),
+    f(Id::Abs, "ABS", &[R], R1),
+    f(Id::DAbs, "DABS", &[D], D1),
+    f(Id::Sqrt, "SQRT", &[R], R1),
+    f(Id::DSqrt, "DSQRT", &[D], D1),
+    f(Id::IsNan, "ISNAN", &[B], R1),
+    f(Id::DIsNan, "DISNAN", &[B], D1),
+    f(Id::NotFinite, "NOTFINITE", &[B], R1),
+    f(Id::DNotFinite, "DNOTFINITE", &[B], D1),
+    f(Id::Ordered, "ORDERED", &[B], R2),
+    f(Id::DOrdered, "DORDERED", &[B], D2),
+    f(Id::MulBy2, "MULBY2", &[R], R1),
+    f(Id::DMulBy2, "DMULBY2", &[D], D1),
+    f(Id::DivBy2, "DIVBY2", &[R], R1),
+    f(Id::DDivBy2, "DDIVBY2", &[D], D1),
+    f(Id::LogB, "LOGB", &[R], R1),
+    f(Id::DLogB, "DLOGB", &[D], D1),
+    f(Id::ScaleB, "SCALEB", &[R], RI),
+    f(Id::DScaleB, "DSCALEB", &[D], DI),
+    f(Id::CopySign, "COPYSIGN", &[R], R2),
+    f(Id::DCopySign, "DCOPYSIGN", &[D], D2),
+    f(Id::NextAfter, "NEXTAFTER", &[R], R2),
+    f(Id::DNextAfter, "DNEXTAFTER", &[D], D2),
+    f(Id::MinusX, "MINUSX", &[R], R1),
+    f(Id::DMinusX, "DMINUSX", &[D], D1),
+    f(Id::FloatingUnpack, "FLOATING.UNPACK", &[I, R], R1),
+    f(Id::DFloatingUnpack, "DFLOATING.UNPACK", &[I, D], D1),
+    f(Id::ArgumentReduce, "ARGUMENT.REDUCE", &[B, I32, R], R3),
+    f(Id::DArgumentReduce, "DARGUMENT.REDUCE", &[B, I32, D], D3),
     f(
+        Id::Real32Op,
+        "REAL32OP",
+        &[R],
+        &[(V, P(R)), (V, P(I)), (V, P(R))],
+    ),
+    f(
+        Id::Real64Op,
+        "REAL64OP",
+        &[D],
+        &[(V, P(D)), (V, P(I)), (V, P(D))],
+    ),
+    f(
+        Id::Ieee32Op,
         "IEEE32OP",
         &[B, R],
         &[(V, P(R)), (V, P(I)), (V, P(I)), (V, P(R))],
     ),
     f(
+        Id::Ieee64Op,
         "IEEE64OP",
         &[B, D],
         &[(V, P(D)), (V, P(I)), (V, P(I)), (V, P(D))],
     ),
-    f("REAL32REM", &[R], R2),
-    f("REAL64REM", &[D], D2),
-    f("IEEE32REM", &[B, R], R2),
-    f("IEEE64REM", &[B, D], D2),
-    f("REAL32EQ", &[B], R2),
-    f("REAL64EQ", &[B], D2),
-    f("REAL32GT", &[B], R2),
-    f("REAL64GT", &[B], D2),
-    f("IEEECOMPARE", &[I], R2),
-    f("DIEEECOMPARE", &[I], D2),
-    f("FPINT", &[R], R1),
-    f("DFPINT", &[D], D1),
+    f(Id::Real32Rem, "REAL32REM", &[R], R2),
+    f(Id::Real64Rem, "REAL64REM", &[D], D2),
+    f(Id::Ieee32Rem, "IEEE32REM", &[B, R], R2),
+    f(Id::Ieee64Rem, "IEEE64REM", &[B, D], D2),
+    f(Id::Real32Eq, "REAL32EQ", &[B], R2),
+    f(Id::Real64Eq, "REAL64EQ", &[B], D2),
+    f(Id::Real32Gt, "REAL32GT", &[B], R2),
+    f(Id::Real64Gt, "REAL64GT", &[B], D2),
+    f(Id::IeeeCompare, "IEEECOMPARE", &[I], R2),
+    f(Id::DIeeeCompare, "DIEEECOMPARE", &[I], D2),
+    f(Id::FpInt, "FPINT", &[R], R1),
+    f(Id::DFpInt, "DFPINT", &[D], D1),
     // Bit manipulation and CRCs.
-    f("BITCOUNT", &[I], I2),
-    f("BITREVWORD", &[I], I1),
-    f("BITREVNBITS", &[I], I2),
-    f("CRCWORD", &[I], I3),
-    f("CRCBYTE", &[I], I3),
+    f(Id::BitCount, "BITCOUNT", &[I], I2),
+    f(Id::BitRevWord, "BITREVWORD", &[I], I1),
+    f(Id::BitRevNBits, "BITREVNBITS", &[I], I2),
+    f(Id::CrcWord, "CRCWORD", &[I], I3),
+    f(Id::CrcByte, "CRCBYTE", &[I], I3),
     // Processes.
-    f("ASSERT", &[], &[(V, P(B))]),
-    f("RESCHEDULE", &[], &[]),
-    f("CAUSEERROR", &[], &[]),
+    f(Id::Assert, "ASSERT", &[], &[(V, P(B))]),
+    f(Id::Reschedule, "RESCHEDULE", &[], &[]),
+    f(Id::CauseError, "CAUSEERROR", &[], &[]),
     // 2D block moves (transputer `move2d` family), used by graphics code.
     f(
+        Id::Move2D,
         "MOVE2D",
         &[],
         &[
@@ -173,6 +339,7 @@ pub const PREDEFINED: &[Predefined] = &[
         ],
     ),
     f(
+        Id::Draw2D,
         "DRAW2D",
         &[],
         &[
@@ -187,6 +354,7 @@ pub const PREDEFINED: &[Predefined] = &[
         ],
     ),
     f(
+        Id::Clip2D,
         "CLIP2D",
         &[],
         &[
@@ -238,5 +406,12 @@ mod test {
         assert!(lookup("ASSERT").unwrap().is_proc());
         assert_eq!(lookup("SCALEB").unwrap().params[1].1, PType::P(Prim::Int));
         assert!(lookup("out.string").is_none());
+        for (i, p) in PREDEFINED.iter().enumerate() {
+            assert!(
+                PREDEFINED[..i].iter().all(|o| o.id != p.id),
+                "{} shares its id",
+                p.name
+            );
+        }
     }
 }

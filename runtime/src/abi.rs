@@ -2,7 +2,8 @@
 //!
 //! Everything codegen needs is in this module: the word type, the status codes, the workspace slot
 //! layout, the constants stored in slots and channel words, the signature of a compiled PROC, the
-//! frame-chain protocol and the [`ABI_TABLE`] of runtime entry points.
+//! frame-chain protocol and the runtime [`Entry`] points with their signatures
+//! ([`crate::entries`] holds their implementations' addresses).
 //!
 //! # Compiled code
 //!
@@ -15,7 +16,7 @@
 //!
 //! # Blocking points (the one rule)
 //!
-//! Before calling any entry marked [`AbiEntry::blocking`], compiled code stores into
+//! Before calling any entry marked [`EntrySignature::blocking`], compiled code stores into
 //! `ws[slot::IPTR]` the resume index of the code that follows the call ("after-op" index). If the
 //! entry returns a non-zero status, the function returns that status at once, without touching the
 //! workspace again. (The non-blocking ALT entries also return a `Status`, always `DONE`; their
@@ -124,6 +125,18 @@ impl Status {
     pub const BLOCKED: Status = Status(1);
     /// The node has halted on a runtime error; return.
     pub const HALTED: Status = Status(2);
+    /// Compiled code was resumed at an index it does not have (a corrupt `IPTR`): the runtime
+    /// reports it as [`crate::RunError::BadStatus`].
+    pub const BAD_RESUME: Status = Status(Status::HALTED.0 + 100);
+}
+
+/// Bytes in a [`Word`].
+pub const WORD_BYTES: i32 = std::mem::size_of::<Word>() as i32;
+
+/// The byte offset of word `w` from a word-aligned address (a workspace slot, a join-block word, a
+/// frame word).
+pub const fn word_offset(w: isize) -> i32 {
+    w as i32 * WORD_BYTES
 }
 
 /// Byte offset, from the `node` pointer, of the `u32` timeslice/preemption flag.
@@ -135,6 +148,12 @@ pub const YIELD_FLAG_OFFSET: i32 = 0;
 pub const NODE_CUR_PRI_OFFSET: i32 = std::mem::offset_of!(Node, cur_pri) as i32;
 /// See [`NODE_CUR_PRI_OFFSET`].
 pub const NODE_QUEUES_OFFSET: i32 = std::mem::offset_of!(Node, queues) as i32;
+/// Bytes of one run queue in the node's array of queues (indexed by priority).
+pub const RUN_QUEUE_BYTES: i32 = std::mem::size_of::<crate::node::Queue>() as i32;
+/// Byte offset of a run queue's front (a [`Wptr`], null when empty) inside the queue.
+pub const RUN_QUEUE_FRONT: i32 = std::mem::offset_of!(crate::node::Queue, front) as i32;
+/// Byte offset of a run queue's back (a [`Wptr`]) inside the queue.
+pub const RUN_QUEUE_BACK: i32 = std::mem::offset_of!(crate::node::Queue, back) as i32;
 /// See [`NODE_CUR_PRI_OFFSET`].
 pub const NODE_COMMUNICATIONS_OFFSET: i32 = (std::mem::offset_of!(Node, stats)
     + std::mem::offset_of!(crate::stats::Stats, communications))
@@ -177,6 +196,20 @@ pub mod slot {
     pub const HEADER_WORDS: usize = 13;
 }
 
+/// Word offsets, from Wptr, of the fixed words at the bottom of every compiled frame (its locals
+/// follow them). Whoever starts an entry PROC sets both to 0.
+pub mod frame {
+    /// The static link: the lexically enclosing function's frame (0 for an outermost PROC; a PAR
+    /// branch's parent frame).
+    pub const STATIC_LINK: isize = 0;
+    /// The PAR join block's address (PAR branches only; 0 otherwise).
+    pub const JOIN: isize = 1;
+    /// The fixed words.
+    pub const FIXED_WORDS: usize = 2;
+    /// Words allocated for an entry PROC's frame beyond the frame size codegen reports (spare).
+    pub const ENTRY_SPARE_WORDS: usize = 2;
+}
+
 /// Word offsets inside a PAR join block.
 pub mod join {
     /// 0 until the parent waits (`rt_par_wait`), then its descriptor (Wptr | priority), resumed
@@ -204,15 +237,15 @@ pub mod priority {
 ///
 /// A channel word is 0 (empty); `Wptr | pri` (a process waits with its data pointer in
 /// `POINTER`); `Wptr | TAG_ALT | pri` (an ALTing process has enabled it); or
-/// `endpoint | TAG_EXTERNAL` (a link or host endpoint stands behind the channel).
+/// `endpoint | TAG_ENDPOINT` (a link or host endpoint stands behind the channel).
 pub mod tag {
     use super::Word;
     /// Bit 0: the waiting process is low priority.
     pub const LOW: Word = 1;
     /// Bit 1: the waiting process is ALTing.
     pub const ALT: Word = 2;
-    /// Bit 2: the word points at an external endpoint, not a workspace.
-    pub const EXTERNAL: Word = 4;
+    /// Bit 2: the word points at an endpoint, not a workspace.
+    pub const ENDPOINT: Word = 4;
     /// All tag bits.
     pub const MASK: Word = 7;
 }
@@ -269,97 +302,105 @@ pub enum AbiType {
     Status,
 }
 
-/// One runtime entry point that compiled code may call.
-#[derive(Clone, Copy, Debug)]
-pub struct AbiEntry {
-    /// Symbol name (codegen declares an import of this name and registers `addr` under it).
+/// The signature of one runtime entry point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EntrySignature {
+    /// Symbol name (codegen declares an import of this name).
     pub name: &'static str,
     /// Parameter types, in order.
     pub params: &'static [AbiType],
-    /// Result type, if any.
-    pub ret: Option<AbiType>,
+    /// Result type.
+    pub ret: AbiType,
     /// Whether the entry may deschedule: codegen must store the after-op index first.
     pub blocking: bool,
-    /// The function's address.
-    pub addr: *const u8,
 }
 
-// SAFETY: an AbiEntry only holds static strings and the address of a function, both immutable and
-// valid for the program's lifetime.
-unsafe impl Sync for AbiEntry {}
+/// States every runtime entry once: its handle, symbol, blocking flag, parameters and result.
+macro_rules! entries {
+    ($($(#[$doc:meta])* $v:ident = $sym:literal, $blocking:expr, [$($p:ident),*] -> $ret:ident;)*) => {
+        /// A runtime entry point that compiled code may call: a typed handle, so that calling an
+        /// entry that does not exist is a compile error. [`crate::entries::address`] gives each
+        /// one's implementation.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum Entry {
+            $($(#[$doc])* $v,)*
+        }
 
-use AbiType::{Ptr, Status as St, Word as W};
+        impl Entry {
+            /// Every entry, in declaration order (`Entry::ALL[e as usize] == e`).
+            pub const ALL: &'static [Entry] = &[$(Entry::$v),*];
 
-macro_rules! entry {
-    ($f:path, $blocking:expr, [$($p:expr),*], $ret:expr) => {
-        AbiEntry {
-            name: stringify!($f),
-            params: &[$($p),*],
-            ret: $ret,
-            blocking: $blocking,
-            addr: $f as *const u8,
+            /// The entry's signature.
+            pub const fn signature(self) -> EntrySignature {
+                match self {
+                    $(Entry::$v => EntrySignature {
+                        name: $sym,
+                        params: &[$($p),*],
+                        ret: $ret,
+                        blocking: $blocking,
+                    },)*
+                }
+            }
         }
     };
 }
 
-use crate::alt::{
-    rt_alt, rt_altend, rt_altwt, rt_disc, rt_diss, rt_dist, rt_enbc, rt_enbs, rt_enbt, rt_talt,
-    rt_taltwt,
-};
-use crate::chan::{rt_in, rt_out, rt_preempt};
-use crate::error::rt_error;
-use crate::par::{rt_endp, rt_par_wait, rt_startp, rt_startp_pri, rt_stopp};
-use crate::placement::rt_placement;
-use crate::sched::{rt_reschedule, rt_timeslice};
-use crate::timer::{rt_timer_read, rt_tin};
+use AbiType::{Ptr, Status as St, Word as W};
 
-/// Every runtime entry point, shared by codegen (imports) and the runtime (definitions).
-///
-/// Parameter names by entry (all start with `node`, and `ws` is the calling frame):
-/// - `rt_in(node, ws, chan, data, len) -> Status`, `rt_out(node, ws, chan, data, len) -> Status`,
-///   `rt_preempt(node, ws) -> Status`
-/// - `rt_startp(node, ws, child, code, entry)`, `rt_startp_pri(node, ws, child, code, entry, pri)`,
-///   `rt_endp(node, ws, join)`, `rt_par_wait(node, ws, join)`, `rt_stopp(node, ws)`
-/// - `rt_timeslice(node, ws)`, `rt_reschedule(node, ws)`
-/// - `rt_timer_read(node) -> Word`, `rt_tin(node, ws, time)`
-/// - `rt_alt(node, ws)`, `rt_talt(node, ws)`, `rt_enbc(node, ws, guard, chan)`,
-///   `rt_enbs(node, ws, guard)`, `rt_enbt(node, ws, guard, time)`, `rt_altwt(node, ws)`,
-///   `rt_taltwt(node, ws)`, `rt_disc(node, ws, guard, chan, branch) -> Word`,
-///   `rt_diss(node, ws, guard, branch) -> Word`, `rt_dist(node, ws, guard, time, branch) -> Word`,
-///   `rt_altend(node, ws) -> Word`
-/// - `rt_error(node, ws, kind, location) -> Status` (kind: [`crate::ErrorKind`] code, location:
-///   index into [`crate::ProgramInfo::locations`])
-pub static ABI_TABLE: &[AbiEntry] = &[
-    entry!(rt_in, true, [Ptr, Ptr, Ptr, Ptr, W], Some(St)),
-    entry!(rt_out, true, [Ptr, Ptr, Ptr, Ptr, W], Some(St)),
-    entry!(rt_preempt, true, [Ptr, Ptr], Some(St)),
-    entry!(rt_startp, true, [Ptr, Ptr, Ptr, Ptr, W], Some(St)),
-    entry!(rt_startp_pri, true, [Ptr, Ptr, Ptr, Ptr, W, W], Some(St)),
-    entry!(rt_endp, true, [Ptr, Ptr, Ptr], Some(St)),
-    entry!(rt_par_wait, true, [Ptr, Ptr, Ptr], Some(St)),
-    entry!(rt_stopp, true, [Ptr, Ptr], Some(St)),
-    entry!(rt_timeslice, true, [Ptr, Ptr], Some(St)),
-    entry!(rt_reschedule, true, [Ptr, Ptr], Some(St)),
-    entry!(rt_timer_read, false, [Ptr], Some(W)),
-    entry!(rt_tin, true, [Ptr, Ptr, W], Some(St)),
-    entry!(rt_alt, false, [Ptr, Ptr], Some(St)),
-    entry!(rt_talt, false, [Ptr, Ptr], Some(St)),
-    entry!(rt_enbc, false, [Ptr, Ptr, W, Ptr], Some(St)),
-    entry!(rt_enbs, false, [Ptr, Ptr, W], Some(St)),
-    entry!(rt_enbt, false, [Ptr, Ptr, W, W], Some(St)),
-    entry!(rt_altwt, true, [Ptr, Ptr], Some(St)),
-    entry!(rt_taltwt, true, [Ptr, Ptr], Some(St)),
-    entry!(rt_disc, false, [Ptr, Ptr, W, Ptr, W], Some(W)),
-    entry!(rt_diss, false, [Ptr, Ptr, W, W], Some(W)),
-    entry!(rt_dist, false, [Ptr, Ptr, W, W, W], Some(W)),
-    entry!(rt_altend, false, [Ptr, Ptr], Some(W)),
-    entry!(rt_error, true, [Ptr, Ptr, W, W], Some(St)),
-    entry!(rt_placement, false, [Ptr, Ptr], Some(W)),
-];
-
-/// Finds an entry of [`ABI_TABLE`] by name.
-pub fn abi_entry(name: &str) -> Option<&'static AbiEntry> {
-    ABI_TABLE.iter().find(|e| e.name == name)
+// Parameter names by entry (all start with `node`, and `ws` is the calling frame) are in the
+// docs of each variant; `kind` of `rt_error` is an [`crate::ErrorKind`] code and `location` an
+// index into [`crate::ProgramInfo::locations`].
+entries! {
+    /// `rt_in(node, ws, chan, data, len) -> Status`
+    In = "rt_in", true, [Ptr, Ptr, Ptr, Ptr, W] -> St;
+    /// `rt_out(node, ws, chan, data, len) -> Status`
+    Out = "rt_out", true, [Ptr, Ptr, Ptr, Ptr, W] -> St;
+    /// `rt_preempt(node, ws) -> Status`
+    Preempt = "rt_preempt", true, [Ptr, Ptr] -> St;
+    /// `rt_startp(node, ws, child, code, entry) -> Status`
+    Startp = "rt_startp", true, [Ptr, Ptr, Ptr, Ptr, W] -> St;
+    /// `rt_startp_pri(node, ws, child, code, entry, pri) -> Status`
+    StartpPri = "rt_startp_pri", true, [Ptr, Ptr, Ptr, Ptr, W, W] -> St;
+    /// `rt_endp(node, ws, join) -> Status`
+    Endp = "rt_endp", true, [Ptr, Ptr, Ptr] -> St;
+    /// `rt_par_wait(node, ws, join) -> Status`
+    ParWait = "rt_par_wait", true, [Ptr, Ptr, Ptr] -> St;
+    /// `rt_stopp(node, ws) -> Status`
+    Stopp = "rt_stopp", true, [Ptr, Ptr] -> St;
+    /// `rt_timeslice(node, ws) -> Status`
+    Timeslice = "rt_timeslice", true, [Ptr, Ptr] -> St;
+    /// `rt_reschedule(node, ws) -> Status`
+    Reschedule = "rt_reschedule", true, [Ptr, Ptr] -> St;
+    /// `rt_timer_read(node) -> Word`
+    TimerRead = "rt_timer_read", false, [Ptr] -> W;
+    /// `rt_tin(node, ws, time) -> Status`
+    Tin = "rt_tin", true, [Ptr, Ptr, W] -> St;
+    /// `rt_alt(node, ws) -> Status`
+    Alt = "rt_alt", false, [Ptr, Ptr] -> St;
+    /// `rt_talt(node, ws) -> Status`
+    Talt = "rt_talt", false, [Ptr, Ptr] -> St;
+    /// `rt_enbc(node, ws, guard, chan) -> Status`
+    Enbc = "rt_enbc", false, [Ptr, Ptr, W, Ptr] -> St;
+    /// `rt_enbs(node, ws, guard) -> Status`
+    Enbs = "rt_enbs", false, [Ptr, Ptr, W] -> St;
+    /// `rt_enbt(node, ws, guard, time) -> Status`
+    Enbt = "rt_enbt", false, [Ptr, Ptr, W, W] -> St;
+    /// `rt_altwt(node, ws) -> Status`
+    Altwt = "rt_altwt", true, [Ptr, Ptr] -> St;
+    /// `rt_taltwt(node, ws) -> Status`
+    Taltwt = "rt_taltwt", true, [Ptr, Ptr] -> St;
+    /// `rt_disc(node, ws, guard, chan, branch) -> Word`
+    Disc = "rt_disc", false, [Ptr, Ptr, W, Ptr, W] -> W;
+    /// `rt_diss(node, ws, guard, branch) -> Word`
+    Diss = "rt_diss", false, [Ptr, Ptr, W, W] -> W;
+    /// `rt_dist(node, ws, guard, time, branch) -> Word`
+    Dist = "rt_dist", false, [Ptr, Ptr, W, W, W] -> W;
+    /// `rt_altend(node, ws) -> Word`
+    Altend = "rt_altend", false, [Ptr, Ptr] -> W;
+    /// `rt_error(node, ws, kind, location) -> Status`
+    Error = "rt_error", true, [Ptr, Ptr, W, W] -> St;
+    /// `rt_placement(node, ws) -> Word`
+    Placement = "rt_placement", false, [Ptr, Ptr] -> W;
 }
 
 #[cfg(test)]
@@ -367,33 +408,46 @@ mod test {
     use super::*;
 
     #[test]
-    fn abi_table_is_consistent() {
-        for (i, e) in ABI_TABLE.iter().enumerate() {
-            assert!(e.name.starts_with("rt_"), "{}", e.name);
-            assert!(!e.addr.is_null());
+    fn entries_are_consistent() {
+        for (i, e) in Entry::ALL.iter().enumerate() {
+            assert_eq!(Entry::ALL[*e as usize], *e);
+            let s = e.signature();
+            assert!(s.name.starts_with("rt_"), "{}", s.name);
             assert!(
-                ABI_TABLE[..i].iter().all(|o| o.name != e.name),
+                Entry::ALL[..i].iter().all(|o| o.signature().name != s.name),
                 "duplicate {}",
-                e.name
+                s.name
             );
-            assert!(e.params.len() <= 6, "{} has too many parameters", e.name);
+            assert!(s.params.len() <= 6, "{} has too many parameters", s.name);
             assert_eq!(
-                e.params[0],
+                s.params[0],
                 AbiType::Ptr,
                 "{}: the node comes first",
-                e.name
+                s.name
             );
-            if e.blocking {
+            if s.blocking {
                 assert_eq!(
-                    e.ret,
-                    Some(AbiType::Status),
+                    s.ret,
+                    AbiType::Status,
                     "{} blocks: it returns a Status",
-                    e.name
+                    s.name
                 );
             }
         }
-        assert_eq!(abi_entry("rt_in").map(|e| e.params.len()), Some(5));
-        assert!(abi_entry("rt_nonesuch").is_none());
+        assert_eq!(Entry::In.signature().params.len(), 5);
+    }
+
+    #[test]
+    fn layout_constants_match_the_types() {
+        assert_eq!(WORD_BYTES as usize, std::mem::size_of::<Word>());
+        assert_eq!(word_offset(slot::LINK), -2 * WORD_BYTES);
+        assert_eq!(RUN_QUEUE_BYTES, 2 * WORD_BYTES);
+        assert_eq!(
+            (RUN_QUEUE_FRONT, RUN_QUEUE_BACK),
+            (0, WORD_BYTES),
+            "a run queue is [front, back]"
+        );
+        assert!(![Status::DONE, Status::BLOCKED, Status::HALTED].contains(&Status::BAD_RESUME));
     }
 
     #[test]

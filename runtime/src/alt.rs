@@ -65,8 +65,8 @@ pub unsafe extern "C" fn rt_enbc(
         let me = node.desc(ws) | tag::ALT;
         if w == NOT_PROCESS {
             *chan = me;
-        } else if w & tag::EXTERNAL != 0 {
-            if node.external_enable(ws, w) {
+        } else if w & tag::ENDPOINT != 0 {
+            if node.endpoint_enable(ws, w) {
                 set(ws, slot::STATE, alt_state::READY);
             }
         } else if w != me {
@@ -191,8 +191,8 @@ pub unsafe extern "C" fn rt_disc(
         if w == NOT_PROCESS {
             return 0;
         }
-        if w & tag::EXTERNAL != 0 {
-            if !node.external_disable(ws, w) {
+        if w & tag::ENDPOINT != 0 {
+            if !node.endpoint_disable(ws, w) {
                 return 0;
             }
         } else if w & tag::ALT != 0 {

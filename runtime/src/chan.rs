@@ -21,7 +21,7 @@
 //!   +---------------+
 //!
 //!   +------------------+  permanently: a link or host endpoint; `in`/`out` go to the
-//!   | endpoint|EXTERNAL|  endpoint's engine (crate::external)
+//!   | endpoint|ENDPOINT|  endpoint's engine (crate::endpoint)
 //!   +------------------+
 //! ```
 //!
@@ -101,9 +101,9 @@ pub unsafe extern "C" fn rt_in(
         unsafe { park(node, ws, chan, data, chan as Word) };
         return Status::BLOCKED;
     }
-    if w & tag::EXTERNAL != 0 {
-        // SAFETY: an EXTERNAL word always points at one of this node's endpoints.
-        return unsafe { in_external(node, ws, chan, w, data, len) };
+    if w & tag::ENDPOINT != 0 {
+        // SAFETY: an ENDPOINT word always points at one of this node's endpoints.
+        return unsafe { in_endpoint(node, ws, chan, w, data, len) };
     }
     // SAFETY: an outputter is parked in the word; its POINTER slot is valid for `len` bytes.
     unsafe {
@@ -136,7 +136,7 @@ pub unsafe extern "C" fn rt_out(
         unsafe { park(node, ws, chan, data, what) };
         return Status::BLOCKED;
     }
-    if w & (tag::EXTERNAL | tag::ALT) != 0 {
+    if w & (tag::ENDPOINT | tag::ALT) != 0 {
         // SAFETY: the word is an endpoint or an ALTing reader of this node.
         return unsafe { out_special(node, ws, chan, w, data, len) };
     }
@@ -208,12 +208,12 @@ unsafe fn complete_any(
     unsafe { complete(node, ws, chan, w, src, dst, len) }
 }
 
-/// `rt_in` on an external channel, out of line (a call keeps the common path a leaf).
+/// `rt_in` on an endpoint channel, out of line (a call keeps the common path a leaf).
 ///
 /// # Safety
-/// As for [`rt_in`]; `w` is the channel's EXTERNAL-tagged word.
+/// As for [`rt_in`]; `w` is the channel's ENDPOINT-tagged word.
 #[inline(never)]
-unsafe fn in_external(
+unsafe fn in_endpoint(
     node: &mut Node,
     ws: Wptr,
     chan: *mut Word,
@@ -222,13 +222,13 @@ unsafe fn in_external(
     len: Word,
 ) -> Status {
     // SAFETY: caller contract.
-    unsafe { node.external_in(ws, chan, w, data, len) }
+    unsafe { node.endpoint_in(ws, chan, w, data, len) }
 }
 
-/// `rt_out` on an external channel or to an ALTing reader, out of line.
+/// `rt_out` on an endpoint channel or to an ALTing reader, out of line.
 ///
 /// # Safety
-/// As for [`rt_out`]; `w` is EXTERNAL- or ALT-tagged.
+/// As for [`rt_out`]; `w` is ENDPOINT- or ALT-tagged.
 #[inline(never)]
 unsafe fn out_special(
     node: &mut Node,
@@ -238,9 +238,9 @@ unsafe fn out_special(
     data: *mut u8,
     len: Word,
 ) -> Status {
-    if w & tag::EXTERNAL != 0 {
-        // SAFETY: an EXTERNAL word always points at one of this node's endpoints.
-        return unsafe { node.external_out(ws, chan, w, data, len) };
+    if w & tag::ENDPOINT != 0 {
+        // SAFETY: an ENDPOINT word always points at one of this node's endpoints.
+        return unsafe { node.endpoint_out(ws, chan, w, data, len) };
     }
     // SAFETY: the reader is ALTing and enabled this channel; it is a live frame.
     unsafe {

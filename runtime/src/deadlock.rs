@@ -146,9 +146,9 @@ fn waits_on(program: &ProgramInfo, what: Word, all: &[Wptr]) -> WaitsOn {
             let chan = what & !tag::MASK;
             // SAFETY: a WAIT slot holding an address holds a live channel word's address.
             let word = unsafe { *(chan as *const Word) };
-            let name = if word & tag::EXTERNAL != 0 {
-                // SAFETY: EXTERNAL words point at this node's endpoints.
-                Some(unsafe { crate::external::external_name(word) })
+            let name = if word & tag::ENDPOINT != 0 {
+                // SAFETY: ENDPOINT words point at this node's endpoints.
+                Some(unsafe { crate::endpoint::endpoint_name(word) })
             } else {
                 channel_name(program, chan, all)
             };

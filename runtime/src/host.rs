@@ -1,6 +1,6 @@
 //! Host I/O: the top-level PROC's `keyboard`, `screen` and `error` byte channels.
 //!
-//! The three channels are external endpoints ([`crate::Node::host_channels`]): output on `screen`
+//! The three channels are endpoints ([`crate::Node::host_channels`]): output on `screen`
 //! or `error` appends to a buffered writer and completes at once (the byte [`FLUSH`] flushes
 //! instead); input on `keyboard` flushes the
 //! screen, then reads from the host's input (blocking the node's thread, like KRoC's blocking

@@ -1,8 +1,8 @@
 //! The process machine: T800-style workspaces, run queues, one-word channels, ALT, timers, PAR,
 //! runtime errors and deadlock detection; nodes, links and network transports.
 //!
-//! Compiled occam (from `occ-codegen`) is a set of [`abi::ProcFn`]s that call the entry points of
-//! [`abi::ABI_TABLE`]; [`abi`] states the whole contract. A [`Node`] runs them: its scheduler
+//! Compiled occam (from `occ-codegen`) is a set of [`abi::ProcFn`]s that call the runtime's
+//! [`abi::Entry`] points ([`entries`] gives their addresses); [`abi`] states the whole contract. A [`Node`] runs them: its scheduler
 //! ([`sched`]), channels ([`chan`]), ALT ([`alt`]), timers ([`timer`]), PAR ([`par`]), errors
 //! ([`error`]) and deadlock reports ([`deadlock`]). Nodes own all their state, so many run in one
 //! OS process; [`Network`] joins them with links, and [`Network::run_all`] (one thread per node)
@@ -12,7 +12,7 @@
 //!
 //! [`ProgramInfo`] (shared by every node running the program) makes reports readable at no run-time
 //! cost: `locations` (the `location` argument of `rt_error` indexes it), and per compiled function
-//! a [`ProcInfo`] with its PROC name, its address, the location of each resume index (deadlock
+//! a [`CodeInfo`] with its PROC name, its address, the location of each resume index (deadlock
 //! reports show where a process is blocked) and the channels declared in its workspace (deadlock
 //! reports name the channel a process waits on, found in the frames of the blocked processes and
 //! their callers).
@@ -82,8 +82,9 @@ pub mod alt;
 mod arena;
 pub mod chan;
 pub mod deadlock;
+mod endpoint;
+pub mod entries;
 pub mod error;
-mod external;
 mod frame;
 pub mod host;
 pub mod intrinsic;
@@ -91,6 +92,7 @@ pub mod link;
 mod mailbox;
 #[cfg(feature = "mpi")]
 pub mod mpi;
+pub mod native;
 pub mod node;
 pub mod par;
 pub mod placement;
@@ -109,6 +111,6 @@ pub use host::HostIo;
 pub use link::{LinkStats, Network};
 pub use node::{Node, NodeConfig};
 pub use pool::PoolView;
-pub use program::{ChannelName, ProcInfo, ProgramInfo, SourceLoc};
+pub use program::{ChannelName, CodeInfo, ProgramInfo, SourceLoc};
 pub use sched::Idle;
 pub use stats::Stats;

@@ -1,6 +1,6 @@
 //! Links between nodes, cross-node wake-ups and network-wide deadlock detection.
 //!
-//! A link direction is a shared `LinkShared` behind an external channel word on each node: the
+//! A link direction is a shared `LinkShared` behind an endpoint's channel word on each node: the
 //! output end on one node, the input end on the other, possibly on another OS thread. It follows
 //! the soft-channel rule: the first party registers itself (descriptor, data pointer, length, its
 //! node's mailbox) and blocks; the second copies the message, completes, and posts the first's
@@ -23,8 +23,8 @@ use std::time::{Duration, Instant};
 
 use crate::abi::{Status, Word, Wptr, tag};
 use crate::chan::copy;
+use crate::endpoint::Engine;
 use crate::error::{ErrorKind, RunError};
-use crate::external::Engine;
 use crate::mailbox::Mailbox;
 use crate::node::Node;
 
@@ -128,7 +128,7 @@ pub(crate) struct LinkShared {
     net: Arc<NetState>,
 }
 
-/// One end of a link direction, held by an external endpoint.
+/// One end of a link direction, held by an endpoint.
 #[derive(Debug, Clone)]
 pub(crate) struct LinkEnd {
     shared: Arc<LinkShared>,
@@ -181,8 +181,8 @@ impl Network {
     pub fn connect(&self, from: &mut Node, to: &mut Node, name: &str) -> (*mut Word, *mut Word) {
         let (out, inp) = self.ends(name);
         (
-            from.add_external(out, &format!("{name} (link out)")),
-            to.add_external(inp, &format!("{name} (link in)")),
+            from.add_endpoint(out, &format!("{name} (link out)")),
+            to.add_endpoint(inp, &format!("{name} (link in)")),
         )
     }
 
@@ -191,8 +191,8 @@ impl Network {
     pub fn connect_loop(&self, node: &mut Node, name: &str) -> (*mut Word, *mut Word) {
         let (out, inp) = self.ends(name);
         (
-            node.add_external(out, &format!("{name} (link out)")),
-            node.add_external(inp, &format!("{name} (link in)")),
+            node.add_endpoint(out, &format!("{name} (link out)")),
+            node.add_endpoint(inp, &format!("{name} (link in)")),
         )
     }
 
@@ -243,7 +243,7 @@ impl Network {
     /// on it waits for ever (and is named `name` in deadlock reports); an ALT guard on it is
     /// never ready.
     pub fn unconnected(node: &mut Node, name: &str) -> *mut Word {
-        node.add_external(Engine::Unconnected, name)
+        node.add_endpoint(Engine::Unconnected, name)
     }
 }
 
@@ -478,7 +478,7 @@ impl Node {
             return;
         }
         self.net_finished = true;
-        for ext in &self.externals {
+        for ext in &self.endpoints {
             if let Engine::LinkIn(end) | Engine::LinkOut(end) = &ext.engine {
                 end.withdraw(&self.mailbox);
             }

@@ -9,8 +9,8 @@ use std::time::Instant;
 
 use crate::abi::{NOT_PROCESS, ProcFn, Word, Wptr, priority, slot};
 use crate::arena::Arena;
+use crate::endpoint::Endpoint;
 use crate::error::{Halt, RunError};
-use crate::external::External;
 use crate::frame::set;
 use crate::host::HostIo;
 use crate::link::NetState;
@@ -80,12 +80,12 @@ pub struct Node {
     pub(crate) arena: Arena,
     pub(crate) program: Arc<ProgramInfo>,
     pub(crate) host: HostIo,
-    /// External endpoints; boxed because channel words hold their addresses.
+    /// Endpoints; boxed because channel words hold their addresses.
     #[allow(
         clippy::vec_box,
         reason = "endpoint addresses must not move when the Vec grows"
     )]
-    pub(crate) externals: Vec<Box<External>>,
+    pub(crate) endpoints: Vec<Box<Endpoint>>,
     /// Frames blocked on a link, to be woken through the mailbox.
     pub(crate) link_waiters: usize,
     pub(crate) mailbox: Arc<Mailbox>,
@@ -132,7 +132,7 @@ impl Node {
             arena: Arena::new(config.memory_budget),
             program,
             host,
-            externals: Vec::new(),
+            endpoints: Vec::new(),
             link_waiters: 0,
             mailbox: Arc::new(Mailbox::default()),
             net: None,

@@ -25,7 +25,7 @@ pub struct ChannelName {
 
 /// What the runtime knows about one compiled function (a PROC or a PAR branch).
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ProcInfo {
+pub struct CodeInfo {
     /// The PROC's name (branches: the enclosing PROC's name).
     pub name: String,
     /// The function's address.
@@ -36,10 +36,10 @@ pub struct ProcInfo {
     pub channels: Vec<ChannelName>,
 }
 
-impl ProcInfo {
+impl CodeInfo {
     /// Describes function `code` named `name`, with no locations or channels yet.
-    pub fn new(name: &str, code: ProcFn) -> ProcInfo {
-        ProcInfo {
+    pub fn new(name: &str, code: ProcFn) -> CodeInfo {
+        CodeInfo {
             name: name.to_string(),
             code: code as usize,
             resume_locations: Vec::new(),
@@ -54,7 +54,7 @@ pub struct ProgramInfo {
     /// Source locations, indexed by the `location` codes passed to `rt_error`.
     pub locations: Vec<SourceLoc>,
     /// Compiled functions.
-    pub procs: Vec<ProcInfo>,
+    pub procs: Vec<CodeInfo>,
 }
 
 impl ProgramInfo {
@@ -73,7 +73,7 @@ impl ProgramInfo {
     }
 
     /// The function whose address is `code`.
-    pub fn proc_by_code(&self, code: usize) -> Option<&ProcInfo> {
+    pub fn proc_by_code(&self, code: usize) -> Option<&CodeInfo> {
         self.procs.iter().find(|p| p.code == code)
     }
 

@@ -23,7 +23,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::abi::Word;
-use crate::external::Engine;
+use crate::endpoint::Engine;
 use crate::link::{LinkEnd, MAIL, NetState, Network, Party};
 use crate::mailbox::Mailbox;
 use crate::node::Node;
@@ -104,9 +104,9 @@ impl Network {
         };
         crate::link::lock(&self.state.remote).push(half);
         if writes {
-            node.add_external(Engine::LinkOut(end), &format!("{name} (link out)"))
+            node.add_endpoint(Engine::LinkOut(end), &format!("{name} (link out)"))
         } else {
-            node.add_external(Engine::LinkIn(end), &format!("{name} (link in)"))
+            node.add_endpoint(Engine::LinkIn(end), &format!("{name} (link in)"))
         }
     }
 

@@ -6,7 +6,7 @@
 //! Fast path: an ALT whose guards are all unconditional inputs on channels first reads the
 //! channel words, in the order disabling would take them. The first holding a waiting outputter
 //! (a plain process word) is selected at once, with no enabling, waiting or disabling; an empty
-//! word is passed over; a word the poll cannot judge (an external endpoint, such as the keyboard
+//! word is passed over; a word the poll cannot judge (an endpoint, such as the keyboard
 //! or a link, which may hold data) sends the ALT to the protocol at once, so that it is never
 //! passed over for a later guard. A guard ready when the ALT starts may always be selected, so
 //! this changes no outcome the T800 protocol allows; when no guard is ready, the protocol runs.
@@ -15,7 +15,7 @@ use cranelift_codegen::ir::{InstBuilder, Value, condcodes::IntCC, types};
 use cranelift_frontend::Switch;
 use occ_grammar::ast::{Alt, AltKind, Alternative, Expr, ProcessKind, Replicator, Span};
 
-use occ_runtime::abi::{NOT_PROCESS, tag};
+use occ_runtime::abi::{Entry, NOT_PROCESS, WORD_BYTES, tag};
 
 use super::{Res, Storage, Tr, mem};
 
@@ -105,7 +105,7 @@ impl Tr<'_, '_> {
             .iter()
             .map(|g| match g {
                 Group::Single(_) => Vec::new(),
-                Group::Repl(levels, _) => levels.iter().map(|_| self.frame.alloc(8)).collect(),
+                Group::Repl(levels, _) => levels.iter().map(|_| self.frame.alloc_word()).collect(),
             })
             .collect();
         let timed = groups.iter().any(|g| {
@@ -124,19 +124,19 @@ impl Tr<'_, '_> {
             self.b.ins().jump(protocol, &[]);
             self.b.switch_to_block(protocol);
         }
-        let start = if timed { "rt_talt" } else { "rt_alt" };
+        let start = if timed { Entry::Talt } else { Entry::Alt };
         self.call_rt(start, &[self.node, self.ws]);
         self.no_poll += 1;
         for (gi, g) in groups.iter().enumerate() {
             self.group(g, gi, None, span)?;
         }
         self.no_poll -= 1;
-        let wait = if timed { "rt_taltwt" } else { "rt_altwt" };
+        let wait = if timed { Entry::Taltwt } else { Entry::Altwt };
         self.blocking(wait, &[self.node, self.ws], span)?;
         self.no_poll += 1;
         self.disable_all(&groups, &saved, rotation, span)?;
         self.no_poll -= 1;
-        let sel = self.call_rt("rt_altend", &[self.node, self.ws]);
+        let sel = self.call_rt(Entry::Altend, &[self.node, self.ws]);
         self.b.ins().jump(selected, &[sel.into()]);
         self.b.switch_to_block(selected);
         let sel = self.b.block_params(selected)[0];
@@ -145,7 +145,7 @@ impl Tr<'_, '_> {
 
     /// The fast path: reads each guard's channel word in disabling order and jumps to
     /// `selected` with the first ready guard's branch number, or to `protocol` at the first word
-    /// holding an external endpoint or an ALT tag; falls through when every word is empty.
+    /// holding an endpoint or an ALT tag; falls through when every word is empty.
     fn poll_ready(
         &mut self,
         groups: &[Group<'_>],
@@ -166,7 +166,7 @@ impl Tr<'_, '_> {
             let waiting = tr.b.ins().icmp_imm_u(IntCC::NotEqual, w, NOT_PROCESS);
             tr.b.ins().brif(waiting, occupied, &[], next, &[]);
             tr.b.switch_to_block(occupied);
-            let special = tr.b.ins().band_imm_u(w, tag::EXTERNAL | tag::ALT);
+            let special = tr.b.ins().band_imm_u(w, tag::ENDPOINT | tag::ALT);
             let plain = tr.b.ins().icmp_imm_u(IntCC::Equal, special, 0);
             let branch = tr.iconst((gi as i64) << 32);
             tr.b.ins()
@@ -184,13 +184,13 @@ impl Tr<'_, '_> {
         if pri || n < 2 {
             return None;
         }
-        let cell = self.cx.intern(vec![0u8; 8]);
+        let cell = self.cx.intern(vec![0u8; WORD_BYTES as usize]);
         let cell = self.iconst(cell);
         let c = self.b.ins().load(types::I64, mem(), cell, 0);
         let c1 = self.b.ins().iadd_imm_s(c, 1);
         self.b.ins().store(mem(), c1, cell, 0);
         let first = self.b.ins().urem_imm_s(c, n as i64);
-        let off = self.frame.alloc(8);
+        let off = self.frame.alloc_word();
         let a = self.local_addr(off);
         self.b.ins().store(mem(), first, a, 0);
         Some(off)
@@ -338,10 +338,10 @@ impl Tr<'_, '_> {
                 self.b.switch_to_block(yes);
                 let ch = self.place(c)?.addr;
                 let r = if en {
-                    self.call_rt("rt_enbc", &[n, w, cond, ch]);
+                    self.call_rt(Entry::Enbc, &[n, w, cond, ch]);
                     self.iconst(0)
                 } else {
-                    self.call_rt("rt_disc", &[n, w, cond, ch, branch])
+                    self.call_rt(Entry::Disc, &[n, w, cond, ch, branch])
                 };
                 self.b.ins().jump(done, &[r.into()]);
                 self.b.switch_to_block(done);
@@ -352,16 +352,16 @@ impl Tr<'_, '_> {
                 let v = self.expr(t)?;
                 let v = self.b.ins().sextend(types::I64, v);
                 if en {
-                    self.call_rt("rt_enbt", &[n, w, cond, v]);
+                    self.call_rt(Entry::Enbt, &[n, w, cond, v]);
                 } else {
-                    return Ok(Some(self.call_rt("rt_dist", &[n, w, cond, v, branch])));
+                    return Ok(Some(self.call_rt(Entry::Dist, &[n, w, cond, v, branch])));
                 }
             }
             (Guard::Skip, true) => {
-                self.call_rt("rt_enbs", &[n, w, cond]);
+                self.call_rt(Entry::Enbs, &[n, w, cond]);
             }
             (Guard::Skip, false) => {
-                return Ok(Some(self.call_rt("rt_diss", &[n, w, cond, branch])));
+                return Ok(Some(self.call_rt(Entry::Diss, &[n, w, cond, branch])));
             }
         }
         Ok(None)

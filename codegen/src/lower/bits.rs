@@ -1,34 +1,32 @@
-//! Predefines lowered through [`crate::native`] helpers (multi-result IEEE and transputer
-//! routines) and the bit and comparison predefines lowered inline: REAL32EQ/GT, REAL64EQ/GT,
-//! IEEECOMPARE/DIEEECOMPARE, BITCOUNT, BITREVWORD and BITREVNBITS.
+//! Predefines called as runtime intrinsics that return their results through `RESULT`
+//! parameters (multi-result IEEE and transputer routines), and the bit and comparison predefines
+//! lowered inline: REAL32EQ/GT, REAL64EQ/GT, IEEECOMPARE/DIEEECOMPARE, BITCOUNT, BITREVWORD and
+//! BITREVNBITS.
 
 use cranelift_codegen::ir::condcodes::{FloatCC, IntCC};
 use cranelift_codegen::ir::{InstBuilder, Value, types};
-use cranelift_module::Module;
+use occ_compiler::predefined::PredefinedId as P;
+use occ_runtime::abi::word_offset;
+use occ_runtime::intrinsic::{Intrinsic, ParamKind};
 
 use super::{Tr, mem};
-use crate::native::{self, Arg, Helper, OUT_WORDS, Out};
 
 impl Tr<'_, '_> {
-    /// Lowers predefine `name` on evaluated arguments `v` if it is one of this module's, giving
-    /// `None` otherwise.
-    pub fn bits_predefine(&mut self, name: &str, v: &[Value]) -> Option<Vec<Value>> {
-        if let Some(h) = native::helper(name).filter(|h| h.args.len() == v.len()) {
-            return Some(self.call_helper(h, v));
-        }
-        let r = match (name, v) {
-            ("REAL32EQ" | "REAL64EQ", [x, y]) => self.b.ins().fcmp(FloatCC::Equal, *x, *y),
-            ("REAL32GT" | "REAL64GT", [x, y]) => self.b.ins().fcmp(FloatCC::GreaterThan, *x, *y),
-            ("IEEECOMPARE" | "DIEEECOMPARE", [x, y]) => self.ieee_compare(*x, *y),
-            ("BITCOUNT", [w, c]) => {
+    /// Lowers bit or comparison predefine `id` on evaluated arguments `v`, giving `None` when it
+    /// is not one of this module's.
+    pub fn bits_predefine(&mut self, id: P, v: &[Value]) -> Option<Value> {
+        Some(match (id, v) {
+            (P::Real32Eq | P::Real64Eq, [x, y]) => self.b.ins().fcmp(FloatCC::Equal, *x, *y),
+            (P::Real32Gt | P::Real64Gt, [x, y]) => self.b.ins().fcmp(FloatCC::GreaterThan, *x, *y),
+            (P::IeeeCompare | P::DIeeeCompare, [x, y]) => self.ieee_compare(*x, *y),
+            (P::BitCount, [w, c]) => {
                 let n = self.b.ins().popcnt(*w);
                 self.b.ins().iadd(n, *c)
             }
-            ("BITREVWORD", [w]) => self.b.ins().bitrev(*w),
-            ("BITREVNBITS", [w, n]) => self.bitrev_n(*w, *n),
+            (P::BitRevWord, [w]) => self.b.ins().bitrev(*w),
+            (P::BitRevNBits, [w, n]) => self.bitrev_n(*w, *n),
             _ => return None,
-        };
-        Some(vec![r])
+        })
     }
 
     /// -1, 0, 1 for less, equal, greater; 2 when unordered.
@@ -60,34 +58,52 @@ impl Tr<'_, '_> {
         self.b.ins().ireduce(types::I32, s)
     }
 
-    /// Calls helper `h` with a temporary output buffer and loads its results.
-    fn call_helper(&mut self, h: &'static Helper, v: &[Value]) -> Vec<Value> {
+    /// Calls predefine intrinsic `i` on the evaluated arguments `v` (its non-`RESULT`
+    /// parameters), with a temporary word for each `RESULT` parameter, and loads the results in
+    /// order: an INT from the word's low 32 bits, a BOOL from its low byte, a REAL32 or REAL64 at
+    /// its address.
+    pub fn call_predefine(&mut self, i: &'static Intrinsic, v: &[Value]) -> Vec<Value> {
+        let results: Vec<ParamKind> = i
+            .params
+            .iter()
+            .copied()
+            .filter(|k| k.is_written())
+            .collect();
+        let buf = self.frame.alloc_words(results.len().max(1));
         let mut args = Vec::new();
-        for (a, x) in h.args.iter().zip(v) {
-            let x = match a {
-                Arg::Int if self.b.func.dfg.value_type(*x) != types::I64 => {
-                    self.b.ins().sextend(types::I64, *x)
+        let (mut vi, mut ri) = (v.iter(), 0);
+        for k in i.params {
+            if k.is_written() {
+                let a = self.local_addr(buf + word_offset(ri));
+                args.push(a);
+                ri += 1;
+                continue;
+            }
+            let Some(&x) = vi.next() else { break };
+            let x = match k {
+                ParamKind::ValInt if self.b.func.dfg.value_type(x) != types::I64 => {
+                    self.b.ins().sextend(types::I64, x)
                 }
-                _ => *x,
+                _ => x,
             };
             args.push(x);
         }
-        let off = self.frame.alloc(8 * OUT_WORDS);
-        let buf = self.local_addr(off);
-        args.push(buf);
-        let id = self.cx.jit.natives[h.name];
-        let f = self.cx.jit.module.declare_func_in_func(id, self.b.func);
+        let id = self.cx.jit.intrinsics[i.name];
+        let f = self.func_ref(id);
         self.b.ins().call(f, &args);
-        let mut out = Vec::new();
-        for (k, r) in h.results.iter().enumerate() {
-            let ty = match r {
-                Out::Int => types::I32,
-                Out::Bool => types::I8,
-                Out::R32 => types::F32,
-                Out::R64 => types::F64,
-            };
-            out.push(self.b.ins().load(ty, mem(), buf, 8 * k as i32));
-        }
-        out
+        let base = self.local_addr(buf);
+        results
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                let ty = match r {
+                    ParamKind::ResultBool => types::I8,
+                    ParamKind::ResultReal32 => types::F32,
+                    ParamKind::ResultReal64 => types::F64,
+                    _ => types::I32,
+                };
+                self.b.ins().load(ty, mem(), base, word_offset(k as isize))
+            })
+            .collect()
     }
 }

@@ -8,7 +8,7 @@ use occ_compiler::types::Type;
 use occ_grammar::ast::{
     Decl, DeclKind, Expr, ExprKind, FunctionBody, Name, Param, ParamMode, Span, Valof,
 };
-use occ_runtime::abi::slot;
+use occ_runtime::abi::{Entry, frame, slot, word_offset};
 use occ_runtime::intrinsic::{self, ParamKind};
 
 use super::{Compiler, ProcEntry, Res, Storage, Tr, mem};
@@ -45,12 +45,14 @@ impl<'p> Compiler<'p> {
             tr.process(body)?;
             // Word 1 is 0 for a called PROC; for a PROC started directly as a PAR branch it
             // is the join block, and the PROC ends the branch.
-            let j = tr.b.ins().load(types::I64, mem(), tr.ws, 8);
+            let j =
+                tr.b.ins()
+                    .load(types::I64, mem(), tr.ws, word_offset(frame::JOIN));
             let endp = tr.b.create_block();
             let done = tr.b.create_block();
             tr.b.ins().brif(j, endp, &[], done, &[]);
             tr.b.switch_to_block(endp);
-            let st = tr.call_rt("rt_endp", &[tr.node, tr.ws, j]);
+            let st = tr.call_rt(Entry::Endp, &[tr.node, tr.ws, j]);
             tr.ret(st);
             tr.b.switch_to_block(done);
             let zero = tr.iconst(0);
@@ -75,7 +77,7 @@ impl<'p> Compiler<'p> {
         let ty = self.checked.symbols[sym].ty.clone();
         let by_value = p.mode == ParamMode::Val && is_scalar(&self.checked.types, &ty);
         let words = if by_value { 1 } else { 1 + rank(&ty) };
-        Ok((frame.alloc(8 * words as i64), by_value, ty))
+        Ok((frame.alloc_words(words), by_value, ty))
     }
 }
 
@@ -91,12 +93,12 @@ impl Tr<'_, '_> {
                     self.call_intrinsic(i, args, span)?;
                     return Ok(());
                 }
+                if let SymbolKind::Predefined(p) = &self.cx.checked.symbols[sym].kind {
+                    return self.predefined_proc(p, args, span);
+                }
                 if let Some(i) = intrinsic::intrinsic(&name.text) {
                     self.call_intrinsic(i, args, span)?;
                     return Ok(());
-                }
-                if let SymbolKind::Predefined(p) = &self.cx.checked.symbols[sym].kind {
-                    return self.predefined_proc(p.name, args, span);
                 }
                 return Err(self
                     .cx
@@ -110,7 +112,9 @@ impl Tr<'_, '_> {
         let cw = self.local_addr(cw_off);
         self.store_actuals(&entry, cw, stores);
         let zero = self.iconst(0);
-        self.b.ins().store(mem(), zero, cw, 8);
+        self.b
+            .ins()
+            .store(mem(), zero, cw, word_offset(frame::JOIN));
         self.enter_frame(cw, entry.id);
         self.call_native(entry.id, cw, span)
     }
@@ -149,7 +153,9 @@ impl Tr<'_, '_> {
     pub fn store_actuals(&mut self, entry: &ProcEntry, cw: Value, stores: Vec<(i32, Vec<Value>)>) {
         for (off, vs) in stores {
             for (k, v) in vs.into_iter().enumerate() {
-                self.b.ins().store(mem(), v, cw, off + 8 * k as i32);
+                self.b
+                    .ins()
+                    .store(mem(), v, cw, off + word_offset(k as isize));
             }
         }
         let link = if entry.depth <= 1 {
@@ -178,15 +184,15 @@ impl Tr<'_, '_> {
         if let Some(i) = self.cx.externals.get(&sym).copied() {
             return self.call_intrinsic(i, args, span);
         }
+        if let SymbolKind::Predefined(p) = &self.cx.checked.symbols[sym].kind {
+            return self.predefined_function(p, args, span);
+        }
         if let Some(i) = intrinsic::intrinsic(&name.text) {
             return self.call_intrinsic(i, args, span);
         }
         let d = match self.cx.env.get(&sym) {
             Some(Storage::Function(d)) => d.clone(),
             _ => {
-                if let SymbolKind::Predefined(p) = &self.cx.checked.symbols[sym].kind {
-                    return self.predefined_function(p.name, args, span);
-                }
                 // A conversion to a named type written `T (x)`.
                 if let SymbolKind::DataType(id) = &self.cx.checked.symbols[sym].kind
                     && args.len() == 1
@@ -251,7 +257,7 @@ impl Tr<'_, '_> {
             match (l, v) {
                 (Some(l), _) => self.bind_ref(psym, &l),
                 (None, Some(v)) => {
-                    let off = self.frame.alloc(8);
+                    let off = self.frame.alloc_word();
                     let a = self.local_addr(off);
                     self.store_scalar(v, a);
                     self.cx.env.insert(
@@ -335,7 +341,7 @@ impl Tr<'_, '_> {
 
     /// Calls a native intrinsic with occam actuals (arrays by address and length, written
     /// scalars through a word temporary copied back after the call).
-    fn call_intrinsic(
+    pub fn call_intrinsic(
         &mut self,
         i: &'static intrinsic::Intrinsic,
         args: &[Expr],
@@ -352,16 +358,19 @@ impl Tr<'_, '_> {
                     vals.push(self.widen_i64(v, a));
                 }
                 ParamKind::ValReal32 | ParamKind::ValReal64 => vals.push(self.expr(a)?),
-                ParamKind::ResultInt | ParamKind::ResultReal32 | ParamKind::ResultBool => {
+                ParamKind::ResultInt
+                | ParamKind::ResultReal32
+                | ParamKind::ResultReal64
+                | ParamKind::ResultBool => {
                     // The intrinsic reads and writes a temporary word holding the variable's
                     // value (so a reference `INT x` is in/out); it is copied back below.
-                    let off = self.frame.alloc(8);
+                    let off = self.frame.alloc_word();
                     let t = self.local_addr(off);
                     let zero = self.iconst(0);
                     self.b.ins().store(mem(), zero, t, 0);
                     let v = self.expr(a)?;
                     let v = match k {
-                        ParamKind::ResultReal32 => v,
+                        ParamKind::ResultReal32 | ParamKind::ResultReal64 => v,
                         _ => self.widen_i64(v, a),
                     };
                     self.b.ins().store(mem(), v, t, 0);
@@ -403,6 +412,7 @@ impl Tr<'_, '_> {
                     Some(self.b.ins().ireduce(types::I8, w))
                 }
                 ParamKind::ResultReal32 => Some(self.b.ins().load(types::F32, mem(), vals[vi], 0)),
+                ParamKind::ResultReal64 => Some(self.b.ins().load(types::F64, mem(), vals[vi], 0)),
                 _ => None,
             };
             if let Some(v) = v {

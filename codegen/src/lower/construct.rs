@@ -22,7 +22,7 @@ impl Tr<'_, '_> {
         let es = size_of(&self.cx.checked.types, &elem)
             .ok_or_else(|| self.cx.unsupported(e.span, "a constructor of open arrays"))?;
         let off = self.frame.alloc(es * i64::from(n).max(1));
-        let idx_off = self.frame.alloc(8);
+        let idx_off = self.frame.alloc_word();
         let base = self.expr(&r.base)?;
         let step = match &r.step {
             Some(s) => self.expr(s)?,

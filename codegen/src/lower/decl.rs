@@ -5,9 +5,10 @@ use cranelift_codegen::ir::{InstBuilder, types};
 use occ_compiler::checked::SymbolKind;
 use occ_compiler::types::Type;
 use occ_grammar::ast::{AbbrevMode, Decl, DeclKind, Expr, ExprKind, Name};
+use occ_runtime::abi::word_offset;
 
 use super::{Loc, Res, Storage, Tr, mem};
-use crate::layout::{is_scalar, rank, size_of};
+use crate::layout::{WORD, is_scalar, rank, size_of};
 
 impl Tr<'_, '_> {
     /// Lowers declaration `d`: allocates and binds its names.
@@ -27,7 +28,7 @@ impl Tr<'_, '_> {
                 match mode {
                     AbbrevMode::Val if is_scalar(&self.cx.checked.types, &ty) => {
                         let v = self.expr(value)?;
-                        let off = self.frame.alloc(8);
+                        let off = self.frame.alloc_word();
                         let a = self.local_addr(off);
                         self.store_scalar(v, a);
                         self.bind(sym, off, false);
@@ -151,16 +152,16 @@ impl Tr<'_, '_> {
         let off = self.alloc_var(&ty, n)?;
         if matches!(crate::layout::base_elem(&ty), Type::Chan(..)) {
             // Channel words start empty.
-            let size = size_of(&self.cx.checked.types, &ty).unwrap_or(8);
+            let size = size_of(&self.cx.checked.types, &ty).unwrap_or(WORD);
             self.channels.push(occ_runtime::program::ChannelName {
-                offset: i64::from(off / 8),
-                count: (size / 8) as u32,
+                offset: i64::from(off) / WORD,
+                count: (size / WORD) as u32,
                 name: n.text.clone(),
             });
             if size <= 64 {
                 let zero = self.iconst(0);
-                for i in 0..size / 8 {
-                    let a = self.local_addr(off + (i * 8) as i32);
+                for i in 0..size / WORD {
+                    let a = self.local_addr(off + word_offset(i as isize));
                     self.b.ins().store(mem(), zero, a, 0);
                 }
             } else {
@@ -198,11 +199,13 @@ impl Tr<'_, '_> {
 
     /// Binds `sym` to a table of the addresses of the channels `items`.
     fn chan_table(&mut self, sym: occ_compiler::checked::SymbolId, items: &[Expr]) -> Res<()> {
-        let off = self.frame.alloc(8 * items.len() as i64);
+        let off = self.frame.alloc_words(items.len());
         for (k, item) in items.iter().enumerate() {
             let l = self.place(item)?;
             let a = self.local_addr(off);
-            self.b.ins().store(mem(), l.addr, a, 8 * k as i32);
+            self.b
+                .ins()
+                .store(mem(), l.addr, a, word_offset(k as isize));
         }
         let st = Storage::ChanTable {
             depth: self.depth,
@@ -216,7 +219,7 @@ impl Tr<'_, '_> {
     /// Binds `sym` by reference to place `l` (address and dimension lengths in the frame).
     pub fn bind_ref(&mut self, sym: occ_compiler::checked::SymbolId, l: &Loc) {
         let words = 1 + rank(&l.ty).max(l.dims.len());
-        let off = self.frame.alloc(8 * words as i64);
+        let off = self.frame.alloc_words(words);
         let a = self.local_addr(off);
         self.b.ins().store(mem(), l.addr, a, 0);
         for (i, d) in l.dims.iter().enumerate() {
@@ -225,7 +228,7 @@ impl Tr<'_, '_> {
             } else {
                 self.b.ins().sextend(types::I64, *d)
             };
-            self.b.ins().store(mem(), d, a, 8 * (i as i32 + 1));
+            self.b.ins().store(mem(), d, a, word_offset(i as isize + 1));
         }
         self.bind(sym, off, true);
     }

@@ -7,7 +7,7 @@ use occ_compiler::types::{Prim, Type};
 use occ_grammar::ast::{Expr, ExprKind, TypeOrExpr, UnOp};
 
 use super::{Loc, Res, Tr};
-use crate::layout::{cl_type, is_scalar, size_of};
+use crate::layout::{WORD, cl_type, is_scalar, size_of};
 
 impl Tr<'_, '_> {
     /// The primitive type of expression `e`.
@@ -170,7 +170,7 @@ impl Tr<'_, '_> {
             }
             _ if is_scalar(&self.cx.checked.types, &ty) => {
                 let v = self.expr(e)?;
-                let size = size_of(&self.cx.checked.types, &ty).unwrap_or(8);
+                let size = size_of(&self.cx.checked.types, &ty).unwrap_or(WORD);
                 let off = self.frame.alloc(size);
                 let addr = self.local_addr(off);
                 self.store_scalar(v, addr);

@@ -8,12 +8,12 @@ use occ_compiler::types::{ChanProtocol, ProtocolItem, ProtocolKind, Type};
 use occ_grammar::ast::{Expr, ExprKind, IoItem, Span, Variant};
 use occ_runtime::ErrorKind;
 use occ_runtime::abi::{
-    NODE_COMMUNICATIONS_OFFSET, NODE_CUR_PRI_OFFSET, NODE_QUEUES_OFFSET, NOT_PROCESS, priority,
-    slot, tag,
+    Entry, NODE_COMMUNICATIONS_OFFSET, NODE_CUR_PRI_OFFSET, NODE_QUEUES_OFFSET, NOT_PROCESS,
+    RUN_QUEUE_BACK, RUN_QUEUE_BYTES, RUN_QUEUE_FRONT, WORD_BYTES, priority, slot, tag, word_offset,
 };
 
 use super::{Res, Tr, mem};
-use crate::layout::{is_scalar, size_of};
+use crate::layout::{WORD, is_scalar, size_of};
 
 /// The protocol of a channel as the code generator sees it.
 pub enum Proto {
@@ -71,7 +71,7 @@ impl Tr<'_, '_> {
                 .iter()
                 .position(|(n, _)| *n == tag.text)
                 .ok_or_else(|| self.cx.internal(tag.span, "unknown tag"))?;
-            let off = self.frame.alloc(8);
+            let off = self.frame.alloc_word();
             let a = self.local_addr(off);
             let v = self.b.ins().iconst(types::I8, idx as i64);
             self.store_scalar(v, a);
@@ -100,7 +100,7 @@ impl Tr<'_, '_> {
     /// its `POINTER`, empty the word, count the communication, put the partner at the back of
     /// its run queue and carry on (through `rt_preempt` when a low-priority process must give
     /// way), exactly what `rt_in`/`rt_out` do for this case but with no call. Every other case
-    /// (first to arrive, an ALTing reader, an external endpoint, another priority) calls
+    /// (first to arrive, an ALTing reader, an endpoint, another priority) calls
     /// `rt_in`/`rt_out`.
     fn communicate(
         &mut self,
@@ -110,7 +110,7 @@ impl Tr<'_, '_> {
         len: i64,
         span: Span,
     ) -> Res<()> {
-        let rt = if output { "rt_out" } else { "rt_in" };
+        let rt = if output { Entry::Out } else { Entry::In };
         let ty = match len {
             1 => types::I8,
             4 => types::I32,
@@ -126,7 +126,7 @@ impl Tr<'_, '_> {
             self.b.create_block(),
         );
         let w = self.b.ins().load(types::I64, mem(), chan, 0);
-        let special = self.b.ins().band_imm_u(w, tag::EXTERNAL | tag::ALT);
+        let special = self.b.ins().band_imm_u(w, tag::ENDPOINT | tag::ALT);
         let plain = self.b.ins().icmp_imm_u(IntCC::Equal, special, 0);
         let waiting = self.b.ins().icmp_imm_u(IntCC::NotEqual, w, NOT_PROCESS);
         let p = self.b.ins().band_imm_u(w, tag::LOW);
@@ -144,7 +144,7 @@ impl Tr<'_, '_> {
         let theirs = self
             .b
             .ins()
-            .load(types::I64, mem(), partner, (slot::POINTER * 8) as i32);
+            .load(types::I64, mem(), partner, word_offset(slot::POINTER));
         let (src, dst) = if output {
             (data, theirs)
         } else {
@@ -164,17 +164,19 @@ impl Tr<'_, '_> {
             .store(mem(), n, self.node, NODE_COMMUNICATIONS_OFFSET);
         self.enqueue_partner(partner, p);
         // A low-priority process gives way to a high-priority one that is ready.
-        let high_front = self
-            .b
-            .ins()
-            .load(types::I64, mem(), self.node, NODE_QUEUES_OFFSET);
+        let high_front = self.b.ins().load(
+            types::I64,
+            mem(),
+            self.node,
+            NODE_QUEUES_OFFSET + RUN_QUEUE_BYTES * priority::HIGH as i32 + RUN_QUEUE_FRONT,
+        );
         let high_ready = self.b.ins().icmp_imm_u(IntCC::NotEqual, high_front, 0);
         let low = self.b.ins().icmp_imm_u(IntCC::Equal, cur, priority::LOW);
         let give_way = self.b.ins().band(high_ready, low);
         let preempt = self.b.create_block();
         self.b.ins().brif(give_way, preempt, &[], done, &[]);
         self.b.switch_to_block(preempt);
-        self.blocking("rt_preempt", &[self.node, self.ws], span)?;
+        self.blocking(Entry::Preempt, &[self.node, self.ws], span)?;
         self.b.ins().jump(done, &[]);
 
         self.b.switch_to_block(slow);
@@ -189,33 +191,35 @@ impl Tr<'_, '_> {
     /// without a branch: the partner's address goes into the queue's front when it is empty,
     /// else into the `LINK` slot of the process at its back.
     fn enqueue_partner(&mut self, partner: Value, p: Value) {
-        let q = self.b.ins().imul_imm_s(p, 16);
+        let (front_at, back_at) = (
+            NODE_QUEUES_OFFSET + RUN_QUEUE_FRONT,
+            NODE_QUEUES_OFFSET + RUN_QUEUE_BACK,
+        );
+        let q = self.b.ins().imul_imm_s(p, i64::from(RUN_QUEUE_BYTES));
         let q = self.b.ins().iadd(self.node, q);
         let zero = self.iconst(0);
         self.b
             .ins()
-            .store(mem(), zero, partner, (slot::LINK * 8) as i32);
-        let front = self.b.ins().load(types::I64, mem(), q, NODE_QUEUES_OFFSET);
-        let back = self
+            .store(mem(), zero, partner, word_offset(slot::LINK));
+        let front = self.b.ins().load(types::I64, mem(), q, front_at);
+        let back = self.b.ins().load(types::I64, mem(), q, back_at);
+        let empty = self.b.ins().icmp_imm_u(IntCC::Equal, front, 0);
+        let front_slot = self.b.ins().iadd_imm_s(q, i64::from(front_at));
+        let back_link = self
             .b
             .ins()
-            .load(types::I64, mem(), q, NODE_QUEUES_OFFSET + 8);
-        let empty = self.b.ins().icmp_imm_u(IntCC::Equal, front, 0);
-        let front_slot = self.b.ins().iadd_imm_s(q, i64::from(NODE_QUEUES_OFFSET));
-        let back_link = self.b.ins().iadd_imm_s(back, slot::LINK as i64 * 8);
+            .iadd_imm_s(back, i64::from(word_offset(slot::LINK)));
         let at = self.b.ins().select(empty, front_slot, back_link);
         self.b.ins().store(mem(), partner, at, 0);
-        self.b
-            .ins()
-            .store(mem(), partner, q, NODE_QUEUES_OFFSET + 8);
+        self.b.ins().store(mem(), partner, q, back_at);
     }
 
     fn output_expr(&mut self, chan: &Expr, e: &Expr, span: Span) -> Res<()> {
         let ty = self.cx.type_of(e)?;
         if is_scalar(&self.cx.checked.types, &ty) {
-            let size = size_of(&self.cx.checked.types, &ty).unwrap_or(8);
+            let size = size_of(&self.cx.checked.types, &ty).unwrap_or(WORD);
             let v = self.expr(e)?;
-            let off = self.frame.alloc(8);
+            let off = self.frame.alloc_word();
             let a = self.local_addr(off);
             self.store_scalar(v, a);
             return self.send(chan, off, size, span);
@@ -223,15 +227,15 @@ impl Tr<'_, '_> {
         let l = self.value_loc(e)?;
         let size = self.loc_size(&l, e.span)?;
         // Keep the address in the frame: the place may need recomputing otherwise.
-        let off = self.frame.alloc(16);
+        let off = self.frame.alloc_words(2);
         let a = self.local_addr(off);
         self.b.ins().store(mem(), l.addr, a, 0);
-        self.b.ins().store(mem(), size, a, 8);
+        self.b.ins().store(mem(), size, a, WORD_BYTES);
         let c = self.chan_addr(chan)?;
         let a = self.local_addr(off);
         let p = self.b.ins().load(types::I64, mem(), a, 0);
-        let s = self.b.ins().load(types::I64, mem(), a, 8);
-        self.blocking("rt_out", &[self.node, self.ws, c, p, s], span)
+        let s = self.b.ins().load(types::I64, mem(), a, WORD_BYTES);
+        self.blocking(Entry::Out, &[self.node, self.ws, c, p, s], span)
     }
 
     fn output_counted(&mut self, chan: &Expr, count: &Expr, data: &Expr, span: Span) -> Res<()> {
@@ -245,7 +249,7 @@ impl Tr<'_, '_> {
         let es = self.elem_size(&l, span)?;
         let size = self.b.ins().imul(n, es);
         let c = self.chan_addr(chan)?;
-        self.blocking("rt_out", &[self.node, self.ws, c, l.addr, size], span)
+        self.blocking(Entry::Out, &[self.node, self.ws, c, l.addr, size], span)
     }
 
     /// `chan ? items` (or a timer read).
@@ -254,7 +258,7 @@ impl Tr<'_, '_> {
             let Some(IoItem::Expr(x)) = items.first() else {
                 return Err(self.cx.internal(span, "timer input without a variable"));
             };
-            let t = self.call_rt("rt_timer_read", &[self.node]);
+            let t = self.call_rt(Entry::TimerRead, &[self.node]);
             let t = self.b.ins().ireduce(types::I32, t);
             let l = self.place(x)?;
             self.store_scalar(t, l.addr);
@@ -273,13 +277,13 @@ impl Tr<'_, '_> {
                 let ty = self.cx.type_of(x)?;
                 let l = self.place(x)?;
                 if is_scalar(&self.cx.checked.types, &ty) {
-                    let len = size_of(&self.cx.checked.types, &ty).unwrap_or(8);
+                    let len = size_of(&self.cx.checked.types, &ty).unwrap_or(WORD);
                     let c = self.chan_addr(chan)?;
                     return self.communicate(false, c, l.addr, len, span);
                 }
                 let size = self.loc_size(&l, x.span)?;
                 let c = self.chan_addr(chan)?;
-                self.blocking("rt_in", &[self.node, self.ws, c, l.addr, size], span)
+                self.blocking(Entry::In, &[self.node, self.ws, c, l.addr, size], span)
             }
             IoItem::Counted { count, data } => {
                 self.input_item(chan, &IoItem::Expr(count.clone()), span)?;
@@ -292,18 +296,18 @@ impl Tr<'_, '_> {
                 let es = self.elem_size(&l, span)?;
                 let size = self.b.ins().imul(n, es);
                 let c = self.chan_addr(chan)?;
-                self.blocking("rt_in", &[self.node, self.ws, c, l.addr, size], span)
+                self.blocking(Entry::In, &[self.node, self.ws, c, l.addr, size], span)
             }
         }
     }
 
     /// `chan ? CASE` with variants.
     pub fn case_input(&mut self, chan: &Expr, variants: &[Variant], span: Span) -> Res<()> {
-        let off = self.frame.alloc(8);
+        let off = self.frame.alloc_word();
         let a = self.local_addr(off);
         let c = self.chan_addr(chan)?;
         let one = self.iconst(1);
-        self.blocking("rt_in", &[self.node, self.ws, c, a, one], span)?;
+        self.blocking(Entry::In, &[self.node, self.ws, c, a, one], span)?;
         self.tag_dispatch(chan, off, variants, span)
     }
 

@@ -35,7 +35,7 @@ use occ_compiler::types::Type;
 use occ_grammar::ast::{self, Span};
 use occ_grammar::source_map::SourceMap;
 use occ_runtime::ErrorKind;
-use occ_runtime::abi::{Status, slot};
+use occ_runtime::abi::{Entry, Status, slot, word_offset};
 use occ_runtime::program::{ChannelName, ProgramInfo};
 
 use crate::error::CodegenError;
@@ -131,7 +131,7 @@ pub struct Compiler<'p> {
     pub funcs: Vec<(FuncId, String, Vec<u32>, Vec<ChannelName>)>,
     /// The name of the PROC being compiled (PAR branches report it).
     pub proc_name: String,
-    /// Each `#PRAGMA EXTERNAL` routine's intrinsic (see [`crate::link`]).
+    /// Each `#PRAGMA EXTERNAL` routine's intrinsic (see [`crate::bind`]).
     pub externals: HashMap<SymbolId, &'static occ_runtime::intrinsic::Intrinsic>,
     /// The network layout, once the `PLACED PAR` is compiled.
     pub network: Option<crate::network::NetworkLayout>,
@@ -140,14 +140,14 @@ pub struct Compiler<'p> {
 
 impl<'p> Compiler<'p> {
     /// Starts compiling `checked` (spans mapped through `map`) with the intrinsics of `set`;
-    /// fails with every EXTERNAL that cannot be bound (see [`crate::link`]).
+    /// fails with every EXTERNAL that cannot be bound (see [`crate::bind`]).
     pub fn new(
         checked: &'p CheckedProgram,
         map: &'p SourceMap,
         set: &occ_runtime::intrinsic::IntrinsicSet,
     ) -> Res<Compiler<'p>> {
         let decl_syms = checked.symbols.iter().map(|(id, s)| (s.span, id)).collect();
-        let bindings = crate::link::bind_externals(checked, set);
+        let bindings = crate::bind::bind_externals(checked, set);
         if !bindings.errors.is_empty() {
             return Err(CodegenError::Link(bindings.errors));
         }
@@ -342,7 +342,7 @@ impl<'p> Tr<'_, 'p> {
         let bad = self.b.create_block();
         sw.emit(&mut self.b, iptr, bad);
         self.b.switch_to_block(bad);
-        let v = self.b.ins().iconst(types::I64, Status::HALTED.0 + 100);
+        let v = self.b.ins().iconst(types::I64, Status::BAD_RESUME.0);
         self.b.ins().return_(&[v]);
         self.b.seal_all_blocks();
         let cfg = self.cx.jit.module_target_config();
@@ -354,9 +354,9 @@ impl<'p> Tr<'_, 'p> {
         )
     }
 
-    /// A reference to runtime entry `name` in this function.
-    pub fn rt(&mut self, name: &str) -> FuncRef {
-        let id = self.cx.jit.imports[name];
+    /// A reference to runtime entry `e` in this function.
+    pub fn rt(&mut self, e: Entry) -> FuncRef {
+        let id = self.cx.jit.entry(e);
         self.func_ref(id)
     }
 
@@ -371,8 +371,8 @@ impl<'p> Tr<'_, 'p> {
     }
 
     /// Calls a non-blocking runtime entry and returns its result.
-    pub fn call_rt(&mut self, name: &str, args: &[Value]) -> Value {
-        let f = self.rt(name);
+    pub fn call_rt(&mut self, e: Entry, args: &[Value]) -> Value {
+        let f = self.rt(e);
         let c = self.b.ins().call(f, args);
         self.b.inst_results(c)[0]
     }
@@ -386,14 +386,14 @@ impl<'p> Tr<'_, 'p> {
     pub fn load_slot(&mut self, s: isize) -> Value {
         self.b
             .ins()
-            .load(types::I64, MemFlagsData::trusted(), self.ws, (s * 8) as i32)
+            .load(types::I64, MemFlagsData::trusted(), self.ws, word_offset(s))
     }
 
     /// Stores `v` into workspace slot `s` of the frame at `base`.
     pub fn store_slot_at(&mut self, base: Value, s: isize, v: Value) {
         self.b
             .ins()
-            .store(MemFlagsData::trusted(), v, base, (s * 8) as i32);
+            .store(MemFlagsData::trusted(), v, base, word_offset(s));
     }
 
     /// Allocates a new resume point at `span`; returns its index and block.
@@ -404,8 +404,8 @@ impl<'p> Tr<'_, 'p> {
         ((self.resumes.len() - 1) as i64, blk)
     }
 
-    /// Calls blocking entry `name` following the blocking-point rule and continues after it.
-    pub fn blocking(&mut self, name: &str, args: &[Value], span: Span) -> Res<()> {
+    /// Calls blocking entry `e` following the blocking-point rule and continues after it.
+    pub fn blocking(&mut self, e: Entry, args: &[Value], span: Span) -> Res<()> {
         if self.in_expr > 0 {
             return Err(self
                 .cx
@@ -414,7 +414,7 @@ impl<'p> Tr<'_, 'p> {
         let (idx, cont) = self.new_resume(span);
         let iv = self.iconst(idx);
         self.store_slot_at(self.ws, slot::IPTR, iv);
-        let f = self.rt(name);
+        let f = self.rt(e);
         let c = self.b.ins().call(f, args);
         let st = self.b.inst_results(c)[0];
         self.b.ins().brif(st, self.exit, &[st.into()], cont, &[]);
@@ -458,7 +458,7 @@ impl<'p> Tr<'_, 'p> {
         let loc = self.cx.location(span);
         let k = self.iconst(kind as i64);
         let l = self.iconst(i64::from(loc));
-        let st = self.call_rt("rt_error", &[self.node, self.ws, k, l]);
+        let st = self.call_rt(Entry::Error, &[self.node, self.ws, k, l]);
         self.b.ins().jump(self.exit, &[st.into()]);
     }
 
@@ -480,7 +480,7 @@ impl<'p> Tr<'_, 'p> {
         self.b.switch_to_block(slow);
         let iv = self.iconst(idx);
         self.store_slot_at(self.ws, slot::IPTR, iv);
-        let st = self.call_rt("rt_timeslice", &[self.node, self.ws]);
+        let st = self.call_rt(Entry::Timeslice, &[self.node, self.ws]);
         self.b.ins().brif(st, self.exit, &[st.into()], head, &[]);
     }
 

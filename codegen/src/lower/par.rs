@@ -4,7 +4,7 @@
 use cranelift_codegen::ir::{InstBuilder, Value, condcodes::IntCC, types};
 use cranelift_module::FuncId;
 use occ_grammar::ast::{Process, Replicator, Span};
-use occ_runtime::abi::{join, priority};
+use occ_runtime::abi::{Entry, WORD_BYTES, frame, join, priority, word_offset};
 
 use occ_grammar::ast::{Expr, ExprKind, ProcessKind};
 
@@ -56,7 +56,7 @@ impl Tr<'_, '_> {
         let depth = self.depth + 1;
         let mut frame = Frame::default();
         if let Some(r) = repl {
-            let off = frame.alloc(8);
+            let off = frame.alloc_word();
             debug_assert_eq!(off, FIRST_LOCAL);
             let sym = self.cx.symbol(&r.name)?;
             self.cx.env.insert(sym, Storage::Var { depth, offset: off });
@@ -64,8 +64,10 @@ impl Tr<'_, '_> {
         self.cx
             .function("par.branch", depth, frame, body.span, |tr| {
                 tr.process(body)?;
-                let j = tr.b.ins().load(types::I64, mem(), tr.ws, 8);
-                let st = tr.call_rt("rt_endp", &[tr.node, tr.ws, j]);
+                let j =
+                    tr.b.ins()
+                        .load(types::I64, mem(), tr.ws, word_offset(frame::JOIN));
+                let st = tr.call_rt(Entry::Endp, &[tr.node, tr.ws, j]);
                 tr.ret(st);
                 Ok(())
             })
@@ -99,19 +101,25 @@ impl Tr<'_, '_> {
         span: Span,
     ) -> Res<()> {
         let j = self.local_addr(join_off);
-        self.b.ins().store(mem(), j, child, 8);
+        self.b
+            .ins()
+            .store(mem(), j, child, word_offset(frame::JOIN));
         let f = self.func_ref(id);
         let code = self.b.ins().func_addr(types::I64, f);
         let zero = self.iconst(0);
         if high {
             let p = self.iconst(priority::HIGH);
             self.blocking(
-                "rt_startp_pri",
+                Entry::StartpPri,
                 &[self.node, self.ws, child, code, zero, p],
                 span,
             )
         } else {
-            self.blocking("rt_startp", &[self.node, self.ws, child, code, zero], span)
+            self.blocking(
+                Entry::Startp,
+                &[self.node, self.ws, child, code, zero],
+                span,
+            )
         }
     }
 
@@ -123,15 +131,17 @@ impl Tr<'_, '_> {
         body: &[Process],
         span: Span,
     ) -> Res<()> {
-        let join_off = self.frame.alloc(8 * join::WORDS as i64);
+        let join_off = self.frame.alloc_words(join::WORDS);
         if let Some(r) = repl {
             return self.par_replicated(r, body, join_off, span);
         }
         let j = self.local_addr(join_off);
         let zero = self.iconst(0);
-        self.b.ins().store(mem(), zero, j, 8 * join::PARENT as i32);
+        self.b
+            .ins()
+            .store(mem(), zero, j, word_offset(join::PARENT));
         let n = self.iconst(body.len() as i64);
-        self.b.ins().store(mem(), n, j, 8 * join::COUNT as i32);
+        self.b.ins().store(mem(), n, j, word_offset(join::COUNT));
         let mut branches = Vec::new();
         for p in body {
             let b = self.make_branch(p, None)?;
@@ -141,7 +151,7 @@ impl Tr<'_, '_> {
             };
             let at = self
                 .frame
-                .alloc(i64::from(HEADER_BYTES) + 8 * i64::from(words));
+                .alloc(i64::from(HEADER_BYTES) + i64::from(WORD_BYTES) * i64::from(words));
             branches.push((b, at + HEADER_BYTES));
         }
         for (i, (b, wptr)) in branches.into_iter().enumerate() {
@@ -150,7 +160,7 @@ impl Tr<'_, '_> {
             self.start(child, id, join_off, pri && i == 0, span)?;
         }
         let j = self.local_addr(join_off);
-        self.blocking("rt_par_wait", &[self.node, self.ws, j], span)
+        self.blocking(Entry::ParWait, &[self.node, self.ws, j], span)
     }
 
     fn par_replicated(
@@ -176,15 +186,15 @@ impl Tr<'_, '_> {
             Branch::Func(_, w) => *w,
             Branch::Direct(e, _) => e.frame_words,
         };
-        let stride = i64::from(HEADER_BYTES) + 8 * i64::from(words);
+        let stride = i64::from(HEADER_BYTES) + i64::from(WORD_BYTES) * i64::from(words);
         let area = self.frame.alloc(stride * count.max(1));
         let (k_off, base_off, step_off) = (
-            self.frame.alloc(8),
-            self.frame.alloc(8),
-            self.frame.alloc(8),
+            self.frame.alloc_word(),
+            self.frame.alloc_word(),
+            self.frame.alloc_word(),
         );
         // A direct branch's actuals are evaluated here, with the index in the parent's frame.
-        let idx_off = self.frame.alloc(8);
+        let idx_off = self.frame.alloc_word();
         if let Branch::Direct(..) = br {
             let sym = self.cx.symbol(&r.name)?;
             self.cx.env.insert(
@@ -206,9 +216,11 @@ impl Tr<'_, '_> {
         }
         let j = self.local_addr(join_off);
         let zero = self.iconst(0);
-        self.b.ins().store(mem(), zero, j, 8 * join::PARENT as i32);
+        self.b
+            .ins()
+            .store(mem(), zero, j, word_offset(join::PARENT));
         let n = self.iconst(count);
-        self.b.ins().store(mem(), n, j, 8 * join::COUNT as i32);
+        self.b.ins().store(mem(), n, j, word_offset(join::COUNT));
         let ka = self.local_addr(k_off);
         self.b.ins().store(mem(), zero, ka, 0);
         let head = self.b.create_block();
@@ -254,6 +266,6 @@ impl Tr<'_, '_> {
         self.b.ins().jump(head, &[]);
         self.b.switch_to_block(exit);
         let j = self.local_addr(join_off);
-        self.blocking("rt_par_wait", &[self.node, self.ws, j], span)
+        self.blocking(Entry::ParWait, &[self.node, self.ws, j], span)
     }
 }

@@ -7,6 +7,7 @@ use occ_compiler::consteval::Value as Const;
 use occ_compiler::types::{Type, TypeDefKind};
 use occ_grammar::ast::{Expr, ExprKind, Span};
 use occ_runtime::ErrorKind;
+use occ_runtime::abi::{WORD_BYTES, word_offset};
 
 use super::{Res, Storage, Tr, mem};
 use crate::layout::{cl_type, record_fields, size_of, static_dims};
@@ -70,11 +71,12 @@ impl Tr<'_, '_> {
                 for (i, d) in sd.iter().enumerate() {
                     let v = match d {
                         Some(n) => self.iconst(i64::from(*n)),
-                        None => {
-                            self.b
-                                .ins()
-                                .load(types::I64, mem(), f, *offset + 8 * (i as i32 + 1))
-                        }
+                        None => self.b.ins().load(
+                            types::I64,
+                            mem(),
+                            f,
+                            *offset + word_offset(i as isize + 1),
+                        ),
                     };
                     dims.push(v);
                 }
@@ -194,7 +196,7 @@ impl Tr<'_, '_> {
             self.check(ok, ErrorKind::Subscript, span);
             let f = self.frame_at(depth);
             let slot = self.b.ins().iadd_imm_s(f, i64::from(offset));
-            let off = self.b.ins().imul_imm_s(i, 8);
+            let off = self.b.ins().imul_imm_s(i, i64::from(WORD_BYTES));
             let slot = self.b.ins().iadd(slot, off);
             let addr = self.b.ins().load(types::I64, mem(), slot, 0);
             let ty = self.cx.type_of(base)?;

@@ -9,6 +9,7 @@ use occ_grammar::ast::{
     CaseOption, Choice, ChoiceKind, Expr, ExprKind, Process, ProcessKind, Replicator, Span,
 };
 use occ_runtime::ErrorKind;
+use occ_runtime::abi::Entry;
 
 use super::{Res, Storage, Tr};
 use crate::layout::is_scalar;
@@ -44,7 +45,7 @@ impl Tr<'_, '_> {
             ProcessKind::Delay { time, .. } => {
                 let t = self.expr(time)?;
                 let t = self.b.ins().sextend(types::I64, t);
-                self.blocking("rt_tin", &[self.node, self.ws, t], p.span)
+                self.blocking(Entry::Tin, &[self.node, self.ws, t], p.span)
             }
             ProcessKind::Seq { repl, body } => match repl {
                 None => body.iter().try_for_each(|q| self.process(q)),
@@ -151,7 +152,7 @@ impl Tr<'_, '_> {
         span: Span,
         body: impl FnOnce(&mut Self) -> Res<()>,
     ) -> Res<()> {
-        let (idx_off, left_off) = (self.frame.alloc(8), self.frame.alloc(8));
+        let (idx_off, left_off) = (self.frame.alloc_word(), self.frame.alloc_word());
         let base = self.expr(&r.base)?;
         let count = self.expr(&r.count)?;
         let counts = self
@@ -159,7 +160,7 @@ impl Tr<'_, '_> {
             .ins()
             .icmp_imm_s(IntCC::SignedGreaterThanOrEqual, count, 0);
         self.check(counts, ErrorKind::ReplicatorCount, r.count.span);
-        let step_off = self.frame.alloc(8);
+        let step_off = self.frame.alloc_word();
         let step = match &r.step {
             Some(s) => self.expr(s)?,
             None => self.b.ins().iconst(types::I32, 1),

@@ -26,6 +26,7 @@
 //! crates state their entries.
 
 mod maths;
+pub mod predefine;
 pub mod realfmt;
 mod strings;
 
@@ -68,6 +69,8 @@ pub enum ParamKind {
     ResultReal32,
     /// `RESULT BOOL` or `BOOL` (written): address of a word the intrinsic sets to 0 or 1.
     ResultBool,
+    /// `RESULT REAL64` (written): address of an `f64` (the predefine intrinsics' results only).
+    ResultReal64,
 }
 
 /// The machine type of one argument or result.
@@ -91,6 +94,7 @@ impl ParamKind {
             | ParamKind::ValBool
             | ParamKind::ResultInt
             | ParamKind::ResultReal32
+            | ParamKind::ResultReal64
             | ParamKind::ResultBool => &[I64],
             ParamKind::ValReal32 => &[F32],
             ParamKind::ValReal64 => &[F64],
@@ -119,6 +123,7 @@ impl ParamKind {
                 | ParamKind::VarBools
                 | ParamKind::ResultInt
                 | ParamKind::ResultReal32
+                | ParamKind::ResultReal64
                 | ParamKind::ResultBool
         )
     }
@@ -149,6 +154,7 @@ impl ParamKind {
             ParamKind::VarBools => "[]BOOL",
             ParamKind::ResultReal32 => "RESULT REAL32",
             ParamKind::ResultBool => "RESULT BOOL",
+            ParamKind::ResultReal64 => "RESULT REAL64",
         }
     }
 }
@@ -201,26 +207,50 @@ macro_rules! real_fn {
     };
 }
 
+/// The predefined REAL routines the maths library implements (the code generator calls them for
+/// the predefines of these names; they are also in [`INTRINSICS`]).
+/// `SQRT`.
+pub const SQRT: Intrinsic = real_fn!("SQRT", [ValReal32], F32, maths::sqrt32);
+/// `DSQRT`.
+pub const DSQRT: Intrinsic = real_fn!("DSQRT", [ValReal64], F64, maths::sqrt64);
+/// `SCALEB`.
+pub const SCALEB: Intrinsic = real_fn!("SCALEB", [ValReal32, ValInt], F32, maths::scaleb32);
+/// `DSCALEB`.
+pub const DSCALEB: Intrinsic = real_fn!("DSCALEB", [ValReal64, ValInt], F64, maths::scaleb64);
+/// `LOGB`.
+pub const LOGB: Intrinsic = real_fn!("LOGB", [ValReal32], F32, maths::logb32);
+/// `DLOGB`.
+pub const DLOGB: Intrinsic = real_fn!("DLOGB", [ValReal64], F64, maths::logb64);
+/// `FPINT`.
+pub const FPINT: Intrinsic = real_fn!("FPINT", [ValReal32], F32, maths::fpint32);
+/// `DFPINT`.
+pub const DFPINT: Intrinsic = real_fn!("DFPINT", [ValReal64], F64, maths::fpint64);
+/// `NEXTAFTER`.
+pub const NEXTAFTER: Intrinsic =
+    real_fn!("NEXTAFTER", [ValReal32, ValReal32], F32, maths::nextafter32);
+/// `DNEXTAFTER`.
+pub const DNEXTAFTER: Intrinsic = real_fn!(
+    "DNEXTAFTER",
+    [ValReal64, ValReal64],
+    F64,
+    maths::nextafter64
+);
+
 /// Every intrinsic, shared by the compiler (calls) and the runtime (definitions): the REAL
 /// predefines SQRT/DSQRT, SCALEB, LOGB, FPINT, NEXTAFTER (and D forms); the Inmos maths library
 /// (SIN ... POWER, single and double: results follow the host's libm to within an ulp or two,
 /// domain errors give NaN as in the Inmos library); and string conversions.
 pub static INTRINSICS: &[Intrinsic] = &[
-    real_fn!("SQRT", [ValReal32], F32, maths::sqrt32),
-    real_fn!("DSQRT", [ValReal64], F64, maths::sqrt64),
-    real_fn!("SCALEB", [ValReal32, ValInt], F32, maths::scaleb32),
-    real_fn!("DSCALEB", [ValReal64, ValInt], F64, maths::scaleb64),
-    real_fn!("LOGB", [ValReal32], F32, maths::logb32),
-    real_fn!("DLOGB", [ValReal64], F64, maths::logb64),
-    real_fn!("FPINT", [ValReal32], F32, maths::fpint32),
-    real_fn!("DFPINT", [ValReal64], F64, maths::fpint64),
-    real_fn!("NEXTAFTER", [ValReal32, ValReal32], F32, maths::nextafter32),
-    real_fn!(
-        "DNEXTAFTER",
-        [ValReal64, ValReal64],
-        F64,
-        maths::nextafter64
-    ),
+    SQRT,
+    DSQRT,
+    SCALEB,
+    DSCALEB,
+    LOGB,
+    DLOGB,
+    FPINT,
+    DFPINT,
+    NEXTAFTER,
+    DNEXTAFTER,
     real_fn!("SIN", [ValReal32], F32, maths::sin32),
     real_fn!("DSIN", [ValReal64], F64, maths::sin64),
     real_fn!("COS", [ValReal32], F32, maths::cos32),

@@ -4,7 +4,7 @@ use occ_runtime::abi::{Status, Word, Wptr, join};
 use occ_runtime::chan::rt_in;
 use occ_runtime::error::rt_error;
 use occ_runtime::par::{rt_endp, rt_par_wait, rt_startp};
-use occ_runtime::{ChannelName, ErrorKind, Node, ProcInfo, ProgramInfo, RunError, WaitsOn};
+use occ_runtime::{ChannelName, CodeInfo, ErrorKind, Node, ProgramInfo, RunError, WaitsOn};
 
 use crate::common::*;
 
@@ -23,7 +23,7 @@ unsafe extern "C" fn marker(ws: Wptr, _node: *mut Node) -> Status {
 fn runtime_error_names_file_line_kind_and_proc() {
     let mut program = ProgramInfo::default();
     let loc = program.add_location("arrays.occ", 42);
-    program.procs.push(ProcInfo::new("index.it", failing));
+    program.procs.push(CodeInfo::new("index.it", failing));
     let (mut node, _) = node_with(program, b"", true);
     let mut ran: Word = 0;
     spawn(
@@ -138,7 +138,7 @@ fn deadlock_reports_every_blocked_process() {
     let mut program = ProgramInfo::default();
     let l_par = program.add_location("dead.occ", 4);
     let l_in = program.add_location("dead.occ", 7);
-    let mut m = ProcInfo::new("main", deadlocking_main);
+    let mut m = CodeInfo::new("main", deadlocking_main);
     m.resume_locations = vec![u32::MAX, l_par];
     m.channels = vec![
         ChannelName {
@@ -153,7 +153,7 @@ fn deadlock_reports_every_blocked_process() {
         },
     ];
     program.procs.push(m);
-    let mut r = ProcInfo::new("main", reader);
+    let mut r = CodeInfo::new("main", reader);
     r.resume_locations = vec![u32::MAX, l_in];
     program.procs.push(r);
     let (mut node, _) = node_with(program, b"", true);

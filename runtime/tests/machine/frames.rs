@@ -3,7 +3,7 @@
 
 use occ_runtime::abi::{ProcFn, Status, Word, Wptr, slot};
 use occ_runtime::chan::rt_in;
-use occ_runtime::{Node, ProcInfo, ProgramInfo, RunError, WaitsOn};
+use occ_runtime::{CodeInfo, Node, ProgramInfo, RunError, WaitsOn};
 
 use crate::common::*;
 
@@ -115,8 +115,8 @@ unsafe extern "C" fn calls_faulty(ws: Wptr, node: *mut Node) -> Status {
 fn runtime_error_in_a_callee_halts_with_its_proc_and_line() {
     let mut program = ProgramInfo::default();
     let loc = program.add_location("calls.occ", 17);
-    program.procs.push(ProcInfo::new("faulty", faulty));
-    program.procs.push(ProcInfo::new("main", calls_faulty));
+    program.procs.push(CodeInfo::new("faulty", faulty));
+    program.procs.push(CodeInfo::new("main", calls_faulty));
     let (mut node, _) = node_with(program, b"", true);
     let mut entries: Word = 0;
     spawn(
@@ -143,10 +143,10 @@ fn deadlock_inside_a_callee_names_the_callee() {
     let mut program = ProgramInfo::default();
     let l_main = program.add_location("deep.occ", 3);
     let l_in = program.add_location("deep.occ", 9);
-    let mut p = ProcInfo::new("inner", inner);
+    let mut p = CodeInfo::new("inner", inner);
     p.resume_locations = vec![u32::MAX, u32::MAX, l_in];
     program.procs.push(p);
-    let mut p = ProcInfo::new("outer", middle);
+    let mut p = CodeInfo::new("outer", middle);
     p.resume_locations = vec![u32::MAX, l_main];
     p.channels.push(occ_runtime::ChannelName {
         offset: 4,

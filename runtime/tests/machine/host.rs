@@ -1,4 +1,4 @@
-//! Host channels: screen output and keyboard input through external endpoints.
+//! Host channels: screen output and keyboard input through endpoints.
 
 use occ_runtime::Node;
 use occ_runtime::abi::{Status, Word, Wptr};

@@ -1,7 +1,7 @@
-//! External endpoints: channel words that a host stream or a link stands behind.
+//! Endpoints: channel words that a host stream or a link stands behind.
 //!
-//! Such a channel word permanently holds `endpoint | TAG_EXTERNAL`, where `endpoint` is an
-//! [`External`] owned by the node (boxed, so its address is stable). `rt_in`/`rt_out`/ALT find the
+//! Such a channel word permanently holds `endpoint | TAG_ENDPOINT`, where `endpoint` is an
+//! [`Endpoint`] owned by the node (boxed, so its address is stable). `rt_in`/`rt_out`/ALT find the
 //! tag and call the endpoint's engine here instead of parking in the word. Compiled code does not
 //! know the difference: it passes the channel word's address as for any channel.
 
@@ -11,7 +11,7 @@ use crate::host::HostStream;
 use crate::link::LinkEnd;
 use crate::node::Node;
 
-/// What stands behind an external channel word.
+/// What stands behind an endpoint's channel word.
 #[derive(Debug)]
 pub(crate) enum Engine {
     /// The host's input (`keyboard`).
@@ -26,37 +26,37 @@ pub(crate) enum Engine {
     Unconnected,
 }
 
-/// An external endpoint and the channel word that designates it.
+/// An endpoint and the channel word that designates it.
 #[derive(Debug)]
 #[repr(align(8))]
-pub(crate) struct External {
+pub(crate) struct Endpoint {
     pub(crate) engine: Engine,
-    /// The channel word compiled code uses: `self as *const _ | TAG_EXTERNAL`.
+    /// The channel word compiled code uses: `self as *const _ | TAG_ENDPOINT`.
     pub(crate) word: Word,
     /// A name for reports (`screen`, `link 0 out`...).
     pub(crate) name: String,
 }
 
-/// The name of the endpoint designated by the EXTERNAL-tagged word `w`.
+/// The name of the endpoint designated by the ENDPOINT-tagged word `w`.
 ///
 /// # Safety
-/// `w` was made by [`Node::add_external`] on a node that is still alive.
-pub(crate) unsafe fn external_name(w: Word) -> String {
+/// `w` was made by [`Node::add_endpoint`] on a node that is still alive.
+pub(crate) unsafe fn endpoint_name(w: Word) -> String {
     // SAFETY: caller contract.
-    unsafe { (*((w & !tag::MASK) as *const External)).name.clone() }
+    unsafe { (*((w & !tag::MASK) as *const Endpoint)).name.clone() }
 }
 
 impl Node {
     /// Registers an endpoint and returns the address of its channel word.
-    pub(crate) fn add_external(&mut self, engine: Engine, name: &str) -> *mut Word {
-        let mut ext = Box::new(External {
+    pub(crate) fn add_endpoint(&mut self, engine: Engine, name: &str) -> *mut Word {
+        let mut ext = Box::new(Endpoint {
             engine,
             word: 0,
             name: name.to_string(),
         });
-        ext.word = (&*ext as *const External as Word) | tag::EXTERNAL;
+        ext.word = (&*ext as *const Endpoint as Word) | tag::ENDPOINT;
         let chan = &mut ext.word as *mut Word;
-        self.externals.push(ext);
+        self.endpoints.push(ext);
         chan
     }
 
@@ -64,26 +64,26 @@ impl Node {
     /// `screen` and `error`, in that order. Pass them as the main PROC's channel parameters.
     pub fn host_channels(&mut self) -> [*mut Word; 3] {
         [
-            self.add_external(Engine::HostIn, "keyboard"),
-            self.add_external(Engine::HostOut(HostStream::Screen), "screen"),
-            self.add_external(Engine::HostOut(HostStream::Error), "error"),
+            self.add_endpoint(Engine::HostIn, "keyboard"),
+            self.add_endpoint(Engine::HostOut(HostStream::Screen), "screen"),
+            self.add_endpoint(Engine::HostOut(HostStream::Error), "error"),
         ]
     }
 
     /// The endpoint designated by the tagged word `w`.
     ///
     /// # Safety
-    /// `w` is an EXTERNAL-tagged word created by [`Node::add_external`] on this node.
-    unsafe fn external(&mut self, w: Word) -> &mut External {
-        // SAFETY: caller contract; the endpoint is boxed and owned by `self.externals`.
-        unsafe { &mut *((w & !tag::MASK) as *mut External) }
+    /// `w` is an ENDPOINT-tagged word created by [`Node::add_endpoint`] on this node.
+    unsafe fn endpoint(&mut self, w: Word) -> &mut Endpoint {
+        // SAFETY: caller contract; the endpoint is boxed and owned by `self.endpoints`.
+        unsafe { &mut *((w & !tag::MASK) as *mut Endpoint) }
     }
 
-    /// `rt_in` on an external channel.
+    /// `rt_in` on an endpoint channel.
     ///
     /// # Safety
-    /// As for `rt_in`; `w` is the channel's EXTERNAL-tagged word.
-    pub(crate) unsafe fn external_in(
+    /// As for `rt_in`; `w` is the channel's ENDPOINT-tagged word.
+    pub(crate) unsafe fn endpoint_in(
         &mut self,
         ws: Wptr,
         chan: *mut Word,
@@ -92,7 +92,7 @@ impl Node {
         len: Word,
     ) -> Status {
         // SAFETY: caller contract.
-        let engine = unsafe { &self.external(w).engine } as *const Engine;
+        let engine = unsafe { &self.endpoint(w).engine } as *const Engine;
         // SAFETY: `data` is valid for `len` bytes (rt_in contract); the endpoint outlives the call.
         unsafe {
             let buf = std::slice::from_raw_parts_mut(data, len.max(0) as usize);
@@ -108,11 +108,11 @@ impl Node {
         }
     }
 
-    /// `rt_out` on an external channel.
+    /// `rt_out` on an endpoint channel.
     ///
     /// # Safety
-    /// As for `rt_out`; `w` is the channel's EXTERNAL-tagged word.
-    pub(crate) unsafe fn external_out(
+    /// As for `rt_out`; `w` is the channel's ENDPOINT-tagged word.
+    pub(crate) unsafe fn endpoint_out(
         &mut self,
         ws: Wptr,
         chan: *mut Word,
@@ -121,7 +121,7 @@ impl Node {
         len: Word,
     ) -> Status {
         // SAFETY: caller contract.
-        let engine = unsafe { &self.external(w).engine } as *const Engine;
+        let engine = unsafe { &self.endpoint(w).engine } as *const Engine;
         // SAFETY: `data` is valid for `len` bytes (rt_out contract); the endpoint outlives the
         // call.
         unsafe {
@@ -140,14 +140,14 @@ impl Node {
         }
     }
 
-    /// `enbc` on an external channel: whether input is ready now (else the ALTer is registered
+    /// `enbc` on an endpoint channel: whether input is ready now (else the ALTer is registered
     /// to be woken).
     ///
     /// # Safety
-    /// `ws` is the ALTing frame; `w` an EXTERNAL-tagged word of this node.
-    pub(crate) unsafe fn external_enable(&mut self, ws: Wptr, w: Word) -> bool {
+    /// `ws` is the ALTing frame; `w` an ENDPOINT-tagged word of this node.
+    pub(crate) unsafe fn endpoint_enable(&mut self, ws: Wptr, w: Word) -> bool {
         // SAFETY: caller contract.
-        let engine = unsafe { &self.external(w).engine } as *const Engine;
+        let engine = unsafe { &self.endpoint(w).engine } as *const Engine;
         // SAFETY: the endpoint outlives the call.
         match unsafe { &*engine } {
             Engine::HostIn => true,
@@ -156,13 +156,13 @@ impl Node {
         }
     }
 
-    /// `disc` on an external channel: whether input is ready (and unregisters the ALTer).
+    /// `disc` on an endpoint channel: whether input is ready (and unregisters the ALTer).
     ///
     /// # Safety
-    /// As for [`Node::external_enable`].
-    pub(crate) unsafe fn external_disable(&mut self, ws: Wptr, w: Word) -> bool {
+    /// As for [`Node::endpoint_enable`].
+    pub(crate) unsafe fn endpoint_disable(&mut self, ws: Wptr, w: Word) -> bool {
         // SAFETY: caller contract.
-        let engine = unsafe { &self.external(w).engine } as *const Engine;
+        let engine = unsafe { &self.endpoint(w).engine } as *const Engine;
         // SAFETY: the endpoint outlives the call.
         match unsafe { &*engine } {
             Engine::HostIn => true,

@@ -18,9 +18,9 @@ use occ_grammar::diagnostic::Diagnostic;
 use occ_runtime::intrinsic::{Intrinsic, IntrinsicSet, MachineType, ParamKind};
 
 /// The code of a call to an EXTERNAL that no linked table has.
-const UNBOUND: &str = "link::unbound";
+const UNBOUND: &str = "bind::unbound";
 /// The code of an EXTERNAL whose signature disagrees with its table entry.
-const MISMATCH: &str = "link::mismatch";
+const MISMATCH: &str = "bind::mismatch";
 
 /// The EXTERNAL routines of a checked program bound to their intrinsics, and the problems.
 #[derive(Debug, Default)]
