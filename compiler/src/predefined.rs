@@ -2,8 +2,9 @@
 //!
 //! These are in scope in every program, outside the outermost declaration, so a program may
 //! redeclare any of them. The table gives what the checker needs (kind, parameter modes and types,
-//! result types); the code generator implements each by name. Signatures follow the occam 2.1
-//! Reference Manual appendix "Predefined routines" and KRoC's `forall` library.
+//! result types) and each routine's [`PredefinedId`], on which the code generator matches.
+//! Signatures follow the occam 2.1 Reference Manual appendix "Predefined routines" and KRoC's
+//! `forall` library.
 
 use crate::types::{Prim, Type};
 

@@ -14,120 +14,56 @@ use super::ParamKind::{
 };
 use crate::abi::Word;
 
-/// An intrinsic implementing a predefine.
-macro_rules! predefine {
-    ($name:literal, [$($p:expr),*], $f:path) => {
-        Intrinsic { name: $name, params: &[$($p),*], result: None, addr: $f as *const u8 }
+/// Declares each predefine intrinsic once, as a constant and in [`PREDEFINES`].
+macro_rules! predefines {
+    ($($(#[$doc:meta])* $id:ident = $name:literal, [$($p:expr),*], $f:path;)*) => {
+        $(
+            $(#[$doc])*
+            pub const $id: Intrinsic = Intrinsic {
+                name: $name,
+                params: &[$($p),*],
+                result: None,
+                addr: $f as *const u8,
+            };
+        )*
+
+        /// Every predefine intrinsic.
+        pub static PREDEFINES: &[Intrinsic] = &[$($id),*];
     };
 }
 
-/// `IEEE32OP`: (error, value).
-pub const IEEE32OP: Intrinsic = predefine!(
-    "IEEE32OP",
-    [
-        ValReal32,
-        ValInt,
-        ValInt,
-        ValReal32,
-        ResultBool,
-        ResultReal32
-    ],
-    ieee32op
-);
-/// `IEEE64OP`: (error, value).
-pub const IEEE64OP: Intrinsic = predefine!(
-    "IEEE64OP",
-    [
-        ValReal64,
-        ValInt,
-        ValInt,
-        ValReal64,
-        ResultBool,
-        ResultReal64
-    ],
-    ieee64op
-);
-/// `IEEE32REM`: (error, value).
-pub const IEEE32REM: Intrinsic = predefine!(
-    "IEEE32REM",
-    [ValReal32, ValReal32, ResultBool, ResultReal32],
-    ieee32rem
-);
-/// `IEEE64REM`: (error, value).
-pub const IEEE64REM: Intrinsic = predefine!(
-    "IEEE64REM",
-    [ValReal64, ValReal64, ResultBool, ResultReal64],
-    ieee64rem
-);
-/// `FLOATING.UNPACK`: (exponent, fraction).
-pub const FLOATING_UNPACK: Intrinsic = predefine!(
-    "FLOATING.UNPACK",
-    [ValReal32, ResultInt, ResultReal32],
-    unpack32
-);
-/// `DFLOATING.UNPACK`: (exponent, fraction).
-pub const DFLOATING_UNPACK: Intrinsic = predefine!(
-    "DFLOATING.UNPACK",
-    [ValReal64, ResultInt, ResultReal64],
-    unpack64
-);
-/// `ARGUMENT.REDUCE`: (ok, N, remainder).
-pub const ARGUMENT_REDUCE: Intrinsic = predefine!(
-    "ARGUMENT.REDUCE",
-    [
-        ValReal32,
-        ValReal32,
-        ValReal32,
-        ResultBool,
-        ResultInt,
-        ResultReal32
-    ],
-    reduce32
-);
-/// `DARGUMENT.REDUCE`: (ok, N, remainder).
-pub const DARGUMENT_REDUCE: Intrinsic = predefine!(
-    "DARGUMENT.REDUCE",
-    [
-        ValReal64,
-        ValReal64,
-        ValReal64,
-        ResultBool,
-        ResultInt,
-        ResultReal64
-    ],
-    reduce64
-);
-/// `UNPACKSN`: (fraction, exponent, type).
-pub const UNPACKSN: Intrinsic = predefine!(
-    "UNPACKSN",
-    [ValInt, ResultInt, ResultInt, ResultInt],
-    unpacksn
-);
-/// `ROUNDSN`: the REAL32 bits.
-pub const ROUNDSN: Intrinsic = predefine!("ROUNDSN", [ValInt, ValInt, ValInt, ResultInt], roundsn);
-/// `FRACMUL`: the product.
-pub const FRACMUL: Intrinsic = predefine!("FRACMUL", [ValInt, ValInt, ResultInt], fracmul);
-/// `CRCWORD`: the CRC.
-pub const CRCWORD: Intrinsic = predefine!("CRCWORD", [ValInt, ValInt, ValInt, ResultInt], crcword);
-/// `CRCBYTE`: the CRC.
-pub const CRCBYTE: Intrinsic = predefine!("CRCBYTE", [ValInt, ValInt, ValInt, ResultInt], crcbyte);
-
-/// Every predefine intrinsic.
-pub static PREDEFINES: &[Intrinsic] = &[
-    IEEE32OP,
-    IEEE64OP,
-    IEEE32REM,
-    IEEE64REM,
-    FLOATING_UNPACK,
-    DFLOATING_UNPACK,
-    ARGUMENT_REDUCE,
-    DARGUMENT_REDUCE,
-    UNPACKSN,
-    ROUNDSN,
-    FRACMUL,
-    CRCWORD,
-    CRCBYTE,
-];
+predefines! {
+    /// `IEEE32OP`: (error, value).
+    IEEE32OP = "IEEE32OP",
+        [ValReal32, ValInt, ValInt, ValReal32, ResultBool, ResultReal32], ieee32op;
+    /// `IEEE64OP`: (error, value).
+    IEEE64OP = "IEEE64OP",
+        [ValReal64, ValInt, ValInt, ValReal64, ResultBool, ResultReal64], ieee64op;
+    /// `IEEE32REM`: (error, value).
+    IEEE32REM = "IEEE32REM", [ValReal32, ValReal32, ResultBool, ResultReal32], ieee32rem;
+    /// `IEEE64REM`: (error, value).
+    IEEE64REM = "IEEE64REM", [ValReal64, ValReal64, ResultBool, ResultReal64], ieee64rem;
+    /// `FLOATING.UNPACK`: (exponent, fraction).
+    FLOATING_UNPACK = "FLOATING.UNPACK", [ValReal32, ResultInt, ResultReal32], unpack32;
+    /// `DFLOATING.UNPACK`: (exponent, fraction).
+    DFLOATING_UNPACK = "DFLOATING.UNPACK", [ValReal64, ResultInt, ResultReal64], unpack64;
+    /// `ARGUMENT.REDUCE`: (ok, N, remainder).
+    ARGUMENT_REDUCE = "ARGUMENT.REDUCE",
+        [ValReal32, ValReal32, ValReal32, ResultBool, ResultInt, ResultReal32], reduce32;
+    /// `DARGUMENT.REDUCE`: (ok, N, remainder).
+    DARGUMENT_REDUCE = "DARGUMENT.REDUCE",
+        [ValReal64, ValReal64, ValReal64, ResultBool, ResultInt, ResultReal64], reduce64;
+    /// `UNPACKSN`: (fraction, exponent, type).
+    UNPACKSN = "UNPACKSN", [ValInt, ResultInt, ResultInt, ResultInt], unpacksn;
+    /// `ROUNDSN`: the REAL32 bits.
+    ROUNDSN = "ROUNDSN", [ValInt, ValInt, ValInt, ResultInt], roundsn;
+    /// `FRACMUL`: the product.
+    FRACMUL = "FRACMUL", [ValInt, ValInt, ResultInt], fracmul;
+    /// `CRCWORD`: the CRC.
+    CRCWORD = "CRCWORD", [ValInt, ValInt, ValInt, ResultInt], crcword;
+    /// `CRCBYTE`: the CRC.
+    CRCBYTE = "CRCBYTE", [ValInt, ValInt, ValInt, ResultInt], crcbyte;
+}
 
 /// An INT result: the low 32 bits, sign-extended to a word.
 fn int(v: i64) -> Word {
