@@ -8,7 +8,7 @@
 //!   included file), after mapping back through `#INCLUDE` re-indentation.
 //!
 //! - A program that checks clean is also linked: every `#PRAGMA EXTERNAL` routine it calls must
-//!   be in [`intrinsics`] with the signature its pragma gives (`occ_codegen::link`), so these
+//!   be in [`intrinsics`] with the signature its pragma gives (`occ_codegen::bind`), so these
 //!   errors come out of `occ check` and `occ test` with lines like the checker's.
 //!
 //! Include search order: the including file's folder, then the `-I` folders, then `stdlib/`
