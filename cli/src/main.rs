@@ -29,7 +29,7 @@ enum Command {
     /// Run a language test suite: each .occ file states its expectation in comments.
     Test(commands::test::Args),
     /// Compute a radiosity solution (the default Cornell box when no scene is given).
-    Radiosity(commands::radiosity::Args),
+    Radiosity(Box<commands::radiosity::Args>),
 }
 
 fn main() -> ExitCode {
@@ -38,7 +38,7 @@ fn main() -> ExitCode {
         Command::Check(args) => commands::check::execute(args),
         Command::Run(args) => commands::run::execute(args),
         Command::Test(args) => commands::test::execute(args),
-        Command::Radiosity(args) => commands::radiosity::execute(args),
+        Command::Radiosity(args) => commands::radiosity::execute(*args),
     };
     match outcome {
         Ok(code) => code,

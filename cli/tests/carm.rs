@@ -384,3 +384,264 @@ fn carm_refuses_what_it_cannot_do_clearly() {
         assert!(stderr.contains(says), "{flags:?}: {stderr}");
     }
 }
+
+/// A room with a grid of `k` x `k` boxes on its floor under a lamp panel (metres, y up), for an
+/// octree of many voxels; written with the rooms' materials into `dir`, whose path it returns.
+fn boxes_scene(dir: &Path, k: usize) -> std::path::PathBuf {
+    std::fs::create_dir_all(dir).expect("a scratch folder");
+    let mtl = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/rooms.mtl");
+    std::fs::copy(mtl, dir.join("rooms.mtl")).expect("rooms.mtl copied");
+    let mut obj = String::from("mtllib rooms.mtl\n");
+    let mut n = 0;
+    // A quad wound to face along `facing`.
+    let mut quad = |obj: &mut String, mut c: [[f64; 3]; 4], facing: [f64; 3]| {
+        let u = [0, 1, 2].map(|i| c[1][i] - c[0][i]);
+        let v = [0, 1, 2].map(|i| c[2][i] - c[0][i]);
+        let normal = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        if (0..3).map(|i| normal[i] * facing[i]).sum::<f64>() < 0.0 {
+            c.reverse();
+        }
+        for p in c {
+            obj.push_str(&format!("v {} {} {}\n", p[0], p[1], p[2]));
+        }
+        obj.push_str(&format!("f {} {} {} {}\n", n + 1, n + 2, n + 3, n + 4));
+        n += 4;
+    };
+    let (up, down) = ([0.0, 1.0, 0.0], [0.0, -1.0, 0.0]);
+    obj.push_str("o light\nusemtl lamp\n");
+    let y = 2.4;
+    quad(
+        &mut obj,
+        [[1.7, y, 1.7], [2.3, y, 1.7], [2.3, y, 2.3], [1.7, y, 2.3]],
+        down,
+    );
+    obj.push_str("o floor\nusemtl floor\n");
+    quad(
+        &mut obj,
+        [
+            [0.0, 0.0, 0.0],
+            [4.0, 0.0, 0.0],
+            [4.0, 0.0, 4.0],
+            [0.0, 0.0, 4.0],
+        ],
+        up,
+    );
+    obj.push_str("o ceiling\nusemtl white\n");
+    quad(
+        &mut obj,
+        [
+            [0.0, 2.5, 0.0],
+            [4.0, 2.5, 0.0],
+            [4.0, 2.5, 4.0],
+            [0.0, 2.5, 4.0],
+        ],
+        down,
+    );
+    obj.push_str("o walls\nusemtl white\n");
+    for (x, facing) in [(0.0, 1.0), (4.0, -1.0)] {
+        quad(
+            &mut obj,
+            [[x, 0.0, 0.0], [x, 2.5, 0.0], [x, 2.5, 4.0], [x, 0.0, 4.0]],
+            [facing, 0.0, 0.0],
+        );
+        let z = x;
+        quad(
+            &mut obj,
+            [[0.0, 0.0, z], [4.0, 0.0, z], [4.0, 2.5, z], [0.0, 2.5, z]],
+            [0.0, 0.0, facing],
+        );
+    }
+    obj.push_str("o boxes\nusemtl wood\n");
+    let (s, h) = (0.12, 0.3);
+    for i in 0..k {
+        for j in 0..k {
+            let at = |i: usize| 0.4 + i as f64 * 3.2 / (k - 1) as f64;
+            let (x0, x1, z0, z1) = (at(i) - s, at(i) + s, at(j) - s, at(j) + s);
+            quad(
+                &mut obj,
+                [[x0, h, z0], [x1, h, z0], [x1, h, z1], [x0, h, z1]],
+                up,
+            );
+            for (x, f) in [(x0, -1.0), (x1, 1.0)] {
+                quad(
+                    &mut obj,
+                    [[x, 0.0, z0], [x, h, z0], [x, h, z1], [x, 0.0, z1]],
+                    [f, 0.0, 0.0],
+                );
+            }
+            for (z, f) in [(z0, -1.0), (z1, 1.0)] {
+                quad(
+                    &mut obj,
+                    [[x0, 0.0, z], [x1, 0.0, z], [x1, h, z], [x0, h, z]],
+                    [0.0, 0.0, f],
+                );
+            }
+        }
+    }
+    let path = dir.join("boxes.obj");
+    std::fs::write(&path, obj).expect("the scene written");
+    path
+}
+
+/// The bytes of all the voxels of a replicated run (each node holds them all).
+fn all_voxel_bytes(report: &serde_json::Value) -> u64 {
+    report["nodes"][0]["voxel_bytes"]
+        .as_u64()
+        .expect("voxel bytes")
+}
+
+/// Spreads `scene`'s voxels with `--node-memory node --cache cache` on 4 nodes and checks the
+/// run against carm's replicated run (the same solution: the same shots and rays) and the
+/// reference solver (within 1%), with the caches and the backing store at work and every node
+/// within its budget. Returns the spread run's report.
+fn assert_spread_agrees(
+    name: &str,
+    settings: &[&str],
+    budget: impl Fn(u64) -> (u64, u64),
+) -> serde_json::Value {
+    let carm = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
+    let reference = radiosity_with(&scratch(&format!("{name}-reference")), settings, &[]);
+    let replicated = radiosity_with(&scratch(&format!("{name}-replicated")), settings, &carm);
+    let all = all_voxel_bytes(&replicated);
+    let (node, cache) = budget(all);
+    let (node_s, cache_s) = (node.to_string(), cache.to_string());
+    let spread_flags = [
+        "--node-memory",
+        node_s.as_str(),
+        "--cache",
+        cache_s.as_str(),
+    ];
+    let out = scratch(name);
+    let spread = radiosity_with(&out, settings, &[&carm[..], &spread_flags[..]].concat());
+    assert!(
+        out.join("backing-store.bin")
+            .metadata()
+            .expect("the backing store")
+            .len()
+            == all,
+        "the backing store holds every voxel"
+    );
+    let (mut misses, mut reads, mut served) = (0, 0, 0);
+    for n in spread["nodes"].as_array().expect("nodes") {
+        let get = |k: &str| n[k].as_u64().unwrap_or_else(|| panic!("{k} in {n}"));
+        assert_eq!(get("voxel_budget"), node, "{n}");
+        assert!(get("voxel_bytes_peak") <= node, "over its budget: {n}");
+        assert!(get("share_bytes") <= node - cache, "{n}");
+        assert!(get("walks") > 0, "{n}");
+        misses += get("cache_misses");
+        reads += get("store_reads");
+        served += get("fetches_served");
+    }
+    assert!(misses > 0 && reads > 0, "{spread}");
+    assert!(reads <= misses, "{spread}");
+    assert!(
+        served > 0,
+        "no node served a fetch from its share: {spread}"
+    );
+    for ((obj, b), (_, r)) in means(&spread).iter().zip(&means(&replicated)) {
+        assert!(
+            apart(b, r) <= 1e-9,
+            "{obj}: spread {b:?} against replicated {r:?}"
+        );
+    }
+    assert_agree(&spread, &reference, "");
+    spread
+}
+
+/// The table lamp's eight voxels spread so that a node keeps at most two voxels' worth (its
+/// largest voxel is more than an eighth of them all).
+#[test]
+fn carm_spreads_the_table_lamps_voxels_over_caches_and_the_backing_store() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
+    let settings = [
+        scene,
+        "--no-adapt",
+        "--rays",
+        "4",
+        "--element-size",
+        "1",
+        "--until",
+        "unshot=0.05",
+        "--image-size",
+        "16",
+    ];
+    assert_spread_agrees("carm-lamp-spread", &settings, |_| (2112, 1056));
+}
+
+/// A room of boxes, an octree of dozens of voxels, spread so that no node keeps more than an
+/// eighth of them.
+#[test]
+fn carm_spreads_a_many_voxel_scene_with_an_eighth_of_it_a_node() {
+    let scene = boxes_scene(&scratch("carm-boxes-scene"), 6);
+    let scene = scene.to_str().expect("a UTF-8 path");
+    let settings = [
+        scene,
+        "--no-adapt",
+        "--rays",
+        "4",
+        "--element-size",
+        "1",
+        "--until",
+        "unshot=0.2",
+        "--image-size",
+        "16",
+    ];
+    let spread = assert_spread_agrees("carm-boxes-spread", &settings, |all| (all / 8, all / 16));
+    assert!(
+        spread["scene"]["octree"]["leaves"].as_u64() > Some(16),
+        "{}",
+        spread["scene"]["octree"]
+    );
+}
+
+#[test]
+fn carm_refuses_bad_voxel_budgets_by_name() {
+    let out = scratch("carm-budget-refusals");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
+    let carm = [
+        scene,
+        "--solver",
+        "carm",
+        "--no-adapt",
+        "--until",
+        "shots=1",
+    ];
+    for (flags, says) in [
+        (
+            &["--node-memory", "4096", "--cache", "1000"][..],
+            "--cache 1000: smaller than the scene's largest voxel (1056 bytes)",
+        ),
+        (
+            &["--node-memory", "1K", "--cache", "2K"][..],
+            "--node-memory 1024 is smaller than --cache 2048",
+        ),
+        (&["--node-memory", "4096"][..], "--cache"),
+        (&["--node-memory", "4096", "--cache", "2Q"][..], "K, M or G"),
+    ] {
+        let output = Command::new(env!("CARGO_BIN_EXE_occ"))
+            .arg("radiosity")
+            .arg("--out")
+            .arg(&out)
+            .args(carm)
+            .args(flags)
+            .output()
+            .expect("the occ binary runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{flags:?} should fail");
+        assert!(stderr.contains(says), "{flags:?}: {stderr}");
+    }
+    // The reference solver holds the whole scene: the settings are carm's.
+    let output = Command::new(env!("CARGO_BIN_EXE_occ"))
+        .arg("radiosity")
+        .arg("--out")
+        .arg(&out)
+        .args(["--node-memory", "4096", "--cache", "2048"])
+        .output()
+        .expect("the occ binary runs");
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("give --solver carm"));
+}

@@ -9,8 +9,11 @@
 //! frame, voxels) and the mesh, and books what the nodes report (per shot, the power each patch
 //! received; at the end, the irradiance at every sample point).
 
+use std::collections::VecDeque;
 use std::f64::consts::PI;
-use std::io::Cursor;
+use std::fs::File;
+use std::io::{Cursor, Read, Seek, SeekFrom};
+use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use glam::{DVec3, Vec3};
@@ -30,6 +33,20 @@ pub const PROGRAM: &str = include_str!("../../../programs/carm.occ");
 /// Most nodes carm.occ takes (its `MAX.NODES`; each node's arrays take about 9 MB).
 const MAX_NODES: usize = 1024;
 
+/// The backing store's file name in the output folder: every voxel's block of REAL32s,
+/// little-endian, in voxel order.
+pub const BACKING_STORE: &str = "backing-store.bin";
+
+/// carm.occ's fixed limits that spreading the voxels must respect (its `FETCHES`, `MAX.QUEUE`
+/// and `QUEUE.FLOATS`): the voxels a node asks for at a time, and a link queue's messages and
+/// REAL32s. (Its voxel pool, `MAX.POOL`, is sized from `--node-memory`.)
+const FETCHES: usize = 2;
+const MAX_QUEUE: usize = FETCHES * MAX_NODES;
+const QUEUE_FLOATS: usize = 65_536;
+
+/// The INTs of a node's counters (carm.occ's `COUNTERS`).
+const COUNTERS: usize = 12;
+
 /// Loop back-edges per timeslice when `--threads 1` makes runs repeat exactly (as `occ run`).
 const COUNTED_SLICE: u32 = 1024;
 
@@ -41,7 +58,8 @@ mod tag {
     pub const COUNTERS: i32 = 3;
     pub const PATCHES: i32 = 4;
     pub const REFUSED: i32 = 5;
-    pub const REHASHED: i32 = 6;
+    pub const READ: i32 = 6;
+    pub const REHASHED: i32 = 7;
 }
 
 /// How to run carm.occ.
@@ -57,6 +75,21 @@ pub struct CarmSettings {
     /// A node holds at most this many times its even share of the sample points (and of their
     /// element corners); a point whose hash names a full node is re-hashed to another.
     pub load_tolerance: f64,
+    /// The voxels spread over the nodes (`--node-memory`, `--cache`); `None`: every voxel on
+    /// every node.
+    pub memory: Option<Memory>,
+}
+
+/// How the voxels are spread: each node keeps a share and a cache, the rest stays on the
+/// backing store.
+#[derive(Clone, Debug)]
+pub struct Memory {
+    /// Bytes of voxels a node may keep, share and cache together (`--node-memory`).
+    pub node: u64,
+    /// Bytes of a node's cache (`--cache`).
+    pub cache: u64,
+    /// The backing store file the host writes and serves voxel reads from.
+    pub store: PathBuf,
 }
 
 /// The default [`CarmSettings::load_tolerance`].
@@ -84,6 +117,24 @@ pub struct NodeCounters {
     pub voxel_bytes: u64,
     /// Sample points it took as a later choice, their first choice being full.
     pub rehashed: u64,
+    /// The most bytes of voxels it held at once (its share and its cache).
+    pub voxel_bytes_peak: u64,
+    /// The bytes of voxels it may hold (`--node-memory`; absent when every node holds every
+    /// voxel).
+    pub voxel_budget: Option<u64>,
+    /// Its share's bytes: the voxels it keeps for the others and never evicts.
+    pub share_bytes: u64,
+    /// Walks of a receiver's shadow rays (one `RAD.RAYS.WALK` to the end, fetching on the way).
+    pub walks: u64,
+    /// Walks answered from the voxels held, with no fetch (cache hits, counted per walk).
+    pub cache_hits: u64,
+    /// Voxels it fetched (cache misses, counted per voxel; a voxel that several rays of a walk
+    /// wait for is fetched once).
+    pub cache_misses: u64,
+    /// Of those, the voxels the host read from the backing store.
+    pub store_reads: u64,
+    /// Fetches it answered from its share.
+    pub fetches_served: u64,
     /// Channel communications (soft and link) it made.
     pub communications: u64,
     /// Fraction of the wall time it spent running processes.
@@ -135,12 +186,15 @@ pub fn solve(
         settings.nodes
     );
     let host_here = transport.as_deref().is_none_or(|t| t.spread().rank == 0);
-    let input = if host_here {
-        host_input(solver)?
+    let (input, store) = if host_here {
+        host_input(solver, settings)?
     } else {
-        Vec::new()
+        (Vec::new(), None)
     };
     let capacities = capacities(solver, settings)?;
+    let shares = store.as_ref().map(|s| s.shares.clone());
+    let reads = store.as_ref().map(|s| s.reads.clone());
+    let answers = Pipe::default();
     let compiled = match &settings.program {
         Some((name, text)) => compile(name, &sized(text, &capacities).0)?,
         None => {
@@ -161,14 +215,16 @@ pub fn solve(
     let tap = Screen {
         bytes: screen.clone(),
         decoded: 0,
-        on_shot: Some(on_shot),
+        broken: false,
+        on_shot,
+        store,
+        answers: answers.clone(),
     };
-    let host = HostIo::new(
-        Box::new(Cursor::new(input)),
-        Box::new(tap),
-        Box::new(errors.clone()),
-    )
-    .binary();
+    let keyboard = Keyboard {
+        first: Cursor::new(input),
+        more: answers,
+    };
+    let host = HostIo::new(Box::new(keyboard), Box::new(tap), Box::new(errors.clone())).binary();
     let mut node = NodeConfig::default();
     if settings.threads == 1 {
         node.counted_slices = Some(COUNTED_SLICE);
@@ -201,7 +257,16 @@ pub fn solve(
         text
     );
     let booked = book(solver, &out)?;
-    Ok(Some(report(&outcome, booked)))
+    let memory = settings
+        .memory
+        .as_ref()
+        .zip(shares)
+        .zip(reads)
+        .map(|((m, shares), reads)| {
+            let reads = reads.lock().unwrap_or_else(|e| e.into_inner()).clone();
+            (m.node, shares, reads)
+        });
+    Ok(Some(report(&outcome, booked, memory)))
 }
 
 /// The values of carm.occ's capacities (`VAL INT NAME IS n:` in its capacities block) for
@@ -229,6 +294,7 @@ fn capacities(
     for e in &mesh.elements {
         per_patch[e.patch as usize] += 1;
     }
+    let most_in_one = per_patch.iter().copied().max().unwrap_or(0);
     let voxels = flat.voxel_count();
     let largest = (0..voxels).map(|v| flat.voxel(v).len()).max().unwrap_or(0);
     let points = mesh.vertices.len();
@@ -237,16 +303,21 @@ fn capacities(
         ("NODE.POINTS", share(points).min(points)),
         ("NODE.CORNERS", share(3 * mesh.elements.len()) + most_at_one),
         ("MAX.ELEMENTS", mesh.elements.len()),
-        (
-            "MAX.PATCH.ELEMENTS",
-            per_patch.iter().copied().max().unwrap_or(0),
-        ),
+        ("MAX.PATCH.ELEMENTS", most_in_one),
         ("MAX.PATCHES", mesh.patches.len()),
         ("MAX.TREE", flat.tree.len()),
         ("MAX.VOXELS", voxels),
-        ("MAX.POOL", flat.pool().len()),
+        // a node's voxels: all of them, or its share and cache within --node-memory
+        (
+            "MAX.POOL",
+            settings.memory.as_ref().map_or(flat.pool().len(), |m| {
+                let floats = |bytes: u64| bytes.div_ceil(4) as usize;
+                floats(m.node).min(flat.pool().len() + floats(m.cache))
+            }),
+        ),
         ("MAX.VOXEL", largest),
         ("MAX.OBJECTS", solver.scene.objects.len()),
+        ("MAX.REPORT", 3 * mesh.patches.len().max(most_in_one)),
     ]
     .into_iter()
     .map(|(name, n)| (name, n.max(1)))
@@ -313,7 +384,10 @@ fn compile(name: &str, text: &str) -> anyhow::Result<occ_codegen::Compiled> {
 /// The host protocol's input: header, the octree's frame and tree, its voxels, patches, sample
 /// points, elements (little-endian; INT is 4 bytes, INT64 and REAL64 8, REAL32 4). The octree is
 /// the reference solver's own, in its flat form, so the nodes' shadow rays meet what its rays do.
-fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
+fn host_input(
+    solver: &Solver,
+    settings: &CarmSettings,
+) -> anyhow::Result<(Vec<u8>, Option<Store>)> {
     let config = solver.config();
     let (scene, mesh) = (solver.scene, &solver.mesh);
     // Negative: not a stopping rule of this run.
@@ -334,6 +408,10 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
         .map_err(|e| anyhow::anyhow!("carm.occ cannot take the scene's octree: {e}"))?;
     let voxels = flat.voxel_count();
     let largest = (0..voxels).map(|v| flat.voxel(v).len()).max().unwrap_or(0);
+    let spread = match &settings.memory {
+        Some(memory) => Some(spread(&flat, memory, settings.nodes)?),
+        None => None,
+    };
     let mut w = Writer::default();
     w.int(int(flat.tree.len(), "the octree's tree INTs")?);
     w.int(int(voxels, "voxels")?);
@@ -376,6 +454,13 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     // Closing each shot's form-factor row where the reference solver does (a closed convex
     // enclosure: every shot's power lands on its surfaces).
     w.int(i32::from(solver.stages.close_rows));
+    // The cache's REAL32s, or -1: every voxel on every node.
+    w.int(
+        settings
+            .memory
+            .as_ref()
+            .map_or(-1, |m| (m.cache / 4) as i32),
+    );
     let mut object_area = vec![0.0f64; scene.objects.len()];
     for e in &mesh.elements {
         object_area[e.object as usize] += mesh.tri(e).area() as f64;
@@ -396,7 +481,16 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
     for &x in &flat.tree {
         w.int(x);
     }
+    if let Some((home, _)) = &spread {
+        for (v, &h) in home.iter().enumerate() {
+            w.int(h);
+            w.int(flat.voxel(v).len() as i32);
+        }
+    }
     for v in 0..voxels {
+        if spread.as_ref().is_some_and(|(home, _)| home[v] < 0) {
+            continue;
+        }
         let block = flat.voxel(v);
         w.int(block.len() as i32);
         for &x in block {
@@ -437,7 +531,127 @@ fn host_input(solver: &Solver) -> anyhow::Result<Vec<u8>> {
             w.real64(emitted[c]);
         }
     }
-    Ok(w.0)
+    let store = match (&settings.memory, spread) {
+        (Some(memory), Some((_, shares))) => Some(Store::write(&memory.store, &flat, shares)?),
+        _ => None,
+    };
+    Ok((w.0, store))
+}
+
+/// Deals the voxels out in order, round the nodes, each node taking a voxel while its share
+/// stays within `--node-memory` less `--cache`; a voxel no node has room for stays on the
+/// backing store only. Returns each voxel's home (a node, or -1) and each node's share in bytes.
+/// Refuses, naming the setting, a cache smaller than the largest voxel, a node memory smaller
+/// than the cache, and link queues too small for the fetches.
+fn spread(
+    flat: &occ_radiosity::octree::flat::FlatOctree,
+    memory: &Memory,
+    nodes: usize,
+) -> anyhow::Result<(Vec<i32>, Vec<u64>)> {
+    let voxels = flat.voxel_count();
+    let largest = (0..voxels).map(|v| flat.voxel_bytes(v)).max().unwrap_or(0) as u64;
+    anyhow::ensure!(
+        memory.cache >= largest.max(4),
+        "--cache {}: smaller than the scene's largest voxel ({largest} bytes); a walk needs one \
+         voxel in the cache at a time",
+        memory.cache
+    );
+    anyhow::ensure!(
+        memory.node >= memory.cache,
+        "--node-memory {} is smaller than --cache {}: the cache is part of the node's memory",
+        memory.node,
+        memory.cache
+    );
+    let floats = (largest / 4).max(1) as usize;
+    anyhow::ensure!(
+        nodes * FETCHES <= MAX_QUEUE.min(QUEUE_FLOATS / floats),
+        "--node-memory: carm.occ's link queues hold {} bytes of voxel answers, too few for {nodes} \
+         nodes each fetching {FETCHES} voxels of up to {largest} bytes (fewer --nodes, or a scene \
+         with smaller voxels)",
+        4 * QUEUE_FLOATS
+    );
+    let room = memory.node - memory.cache;
+    let mut shares = vec![0u64; nodes];
+    let mut next = 0;
+    let home = (0..voxels)
+        .map(|v| {
+            let bytes = flat.voxel_bytes(v) as u64;
+            let taker = (0..nodes)
+                .map(|k| (next + k) % nodes)
+                .find(|&n| shares[n] + bytes <= room);
+            match taker {
+                Some(n) => {
+                    shares[n] += bytes;
+                    next = n + 1;
+                    n as i32
+                }
+                None => -1,
+            }
+        })
+        .collect();
+    Ok((home, shares))
+}
+
+/// The backing store: the host's file of every voxel, which it reads a voxel from when the
+/// root asks (host protocol tag 6), counting the reads per asking node.
+struct Store {
+    file: File,
+    /// Each voxel's offset in the file (bytes) and REAL32s.
+    at: Vec<(u64, usize)>,
+    /// Each node's share in bytes.
+    shares: Vec<u64>,
+    /// Voxels read for each node.
+    reads: Arc<Mutex<Vec<u64>>>,
+}
+
+impl Store {
+    /// Writes every voxel of `flat` to `path` (creating its folder).
+    fn write(
+        path: &std::path::Path,
+        flat: &occ_radiosity::octree::flat::FlatOctree,
+        shares: Vec<u64>,
+    ) -> anyhow::Result<Store> {
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+        }
+        let fail = |e: std::io::Error| anyhow::anyhow!("backing store {}: {e}", path.display());
+        let mut bytes = Vec::with_capacity(4 * flat.pool().len());
+        let mut at = Vec::with_capacity(flat.voxel_count());
+        for v in 0..flat.voxel_count() {
+            let block = flat.voxel(v);
+            at.push((bytes.len() as u64, block.len()));
+            for x in block {
+                bytes.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        std::fs::write(path, &bytes).map_err(fail)?;
+        let file = File::open(path).map_err(fail)?;
+        let nodes = shares.len();
+        Ok(Store {
+            file,
+            at,
+            shares,
+            reads: Arc::new(Mutex::new(vec![0; nodes])),
+        })
+    }
+
+    /// The answer to a read of voxel `v` for node `asker`: INT n, then n REAL32s (n = -1 for a
+    /// voxel that does not exist, which the root refuses).
+    fn answer(&mut self, asker: i32, v: i32) -> std::io::Result<Vec<u8>> {
+        let Some(&(offset, n)) = usize::try_from(v).ok().and_then(|v| self.at.get(v)) else {
+            return Ok((-1i32).to_le_bytes().to_vec());
+        };
+        let mut out = vec![0u8; 4 + 4 * n];
+        out[..4].copy_from_slice(&(n as i32).to_le_bytes());
+        self.file.seek(SeekFrom::Start(offset))?;
+        self.file.read_exact(&mut out[4..])?;
+        let mut reads = self.reads.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(r) = usize::try_from(asker).ok().and_then(|a| reads.get_mut(a)) {
+            *r += 1;
+        }
+        Ok(out)
+    }
 }
 
 /// One message the root writes to the host (programs/README.md, "Host protocol").
@@ -459,8 +673,12 @@ enum Message {
     },
     /// The irradiance at sample point `0`.
     Result(usize, Vec3),
-    /// A node's counters: node, points, corners, form factors, rays, voxels held, their bytes.
-    Counters([u64; 7]),
+    /// A node's counters: node, points, corners, form factors, rays, voxels held at the end,
+    /// their bytes, the most bytes of voxels held, walks, walks that fetched, voxels fetched,
+    /// fetches served.
+    Counters([u64; COUNTERS]),
+    /// A read of voxel `1` from the backing store for node `0`.
+    Read(i32, i32),
     /// Every patch's unshot power left.
     Patches(Vec<DVec3>),
     /// The scene is over the program's capacities: its limits on the tree's INTs, voxels, the
@@ -518,8 +736,9 @@ impl Message {
                 let g = r.int()? as usize;
                 Message::Result(g, Vec3::new(r.real32()?, r.real32()?, r.real32()?))
             }
+            tag::READ => Message::Read(r.int()?, r.int()?),
             tag::COUNTERS => {
-                let mut c = [0u64; 7];
+                let mut c = [0u64; COUNTERS];
                 for x in &mut c {
                     *x = r.int()? as u64;
                 }
@@ -548,9 +767,8 @@ impl Message {
 
 /// What the root reported of its nodes besides the solution.
 struct Booked {
-    /// Each node's own counters: node, points, corners, form factors, rays, voxels held, their
-    /// bytes.
-    nodes: Vec<[u64; 7]>,
+    /// Each node's own counters ([`Message::Counters`]).
+    nodes: Vec<[u64; COUNTERS]>,
     /// The sample points each node took as a later choice.
     rehashed: Vec<u64>,
 }
@@ -580,6 +798,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
         at += len;
         match message {
             Message::End => break,
+            Message::Read(..) => {}
             Message::Shot {
                 shots,
                 src,
@@ -665,8 +884,13 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
     Ok(Booked { nodes, rehashed })
 }
 
-/// The report's per-node and per-link figures.
-fn report(outcome: &NetworkOutcome, booked: Booked) -> CarmReport {
+/// The report's per-node and per-link figures; `memory` is the node memory, each node's share
+/// and the backing-store reads for each node when the voxels were spread.
+fn report(
+    outcome: &NetworkOutcome,
+    booked: Booked,
+    memory: Option<(u64, Vec<u64>, Vec<u64>)>,
+) -> CarmReport {
     let wall = outcome.elapsed.as_secs_f64();
     let rehashed = |node: u64| booked.rehashed.get(node as usize).copied().unwrap_or(0);
     let nodes = outcome
@@ -682,6 +906,20 @@ fn report(outcome: &NetworkOutcome, booked: Booked) -> CarmReport {
             voxels: c[5],
             voxel_bytes: c[6],
             rehashed: rehashed(c[0]),
+            voxel_bytes_peak: c[7],
+            voxel_budget: memory.as_ref().map(|m| m.0),
+            share_bytes: memory
+                .as_ref()
+                .and_then(|m| m.1.get(c[0] as usize).copied())
+                .unwrap_or(c[6]),
+            walks: c[8],
+            cache_hits: c[8] - c[9].min(c[8]),
+            cache_misses: c[10],
+            store_reads: memory
+                .as_ref()
+                .and_then(|m| m.2.get(c[0] as usize).copied())
+                .unwrap_or(0),
+            fetches_served: c[11],
             communications: n.stats.communications,
             busy: if wall > 0.0 {
                 n.busy.as_secs_f64() / wall
@@ -758,40 +996,90 @@ impl Reader<'_> {
     }
 }
 
-/// The root's screen: keeps every byte for [`book`] and tells `on_shot` of each shot as it
-/// arrives (until the output stops making sense, which [`book`] then reports).
+/// The root's screen: keeps every byte for [`book`], tells `on_shot` of each shot as it
+/// arrives and answers the backing-store reads (until the output stops making sense, which
+/// [`book`] then reports).
 struct Screen {
     bytes: SharedBuf,
     /// Bytes decoded so far.
     decoded: usize,
-    on_shot: Option<OnShot>,
+    /// Whether the output stopped making sense.
+    broken: bool,
+    on_shot: OnShot,
+    /// The backing store, when the voxels are spread.
+    store: Option<Store>,
+    /// Where the answers to reads go: the keyboard's input after the scene.
+    answers: Pipe,
 }
 
 impl std::io::Write for Screen {
     fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
         let mut bytes = self.bytes.0.lock().unwrap_or_else(|e| e.into_inner());
         bytes.extend_from_slice(b);
-        while let Some(on_shot) = &mut self.on_shot {
+        while !self.broken {
             match Message::decode(&bytes[self.decoded..]) {
                 Ok(Some((message, len))) => {
                     self.decoded += len;
-                    if let Message::Shot {
-                        shots,
-                        unshot_fraction,
-                        ..
-                    } = message
-                    {
-                        on_shot(shots, unshot_fraction);
+                    match message {
+                        Message::Shot {
+                            shots,
+                            unshot_fraction,
+                            ..
+                        } => (self.on_shot)(shots, unshot_fraction),
+                        Message::Read(asker, v) => {
+                            // With no backing store, the root hears of the end of input.
+                            if let Some(store) = &mut self.store {
+                                let answer = store.answer(asker, v)?;
+                                self.answers.push(&answer);
+                            }
+                        }
+                        _ => {}
                     }
                 }
                 Ok(None) => break,
-                Err(_) => self.on_shot = None,
+                Err(_) => self.broken = true,
             }
         }
         Ok(b.len())
     }
     fn flush(&mut self) -> std::io::Result<()> {
         Ok(())
+    }
+}
+
+/// Bytes for the keyboard that the host produces as the run goes (answers to reads).
+#[derive(Clone, Default)]
+struct Pipe(Arc<Mutex<VecDeque<u8>>>);
+
+impl Pipe {
+    fn push(&self, b: &[u8]) {
+        self.0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .extend(b.iter().copied());
+    }
+}
+
+/// The root's keyboard: the scene, then the answers to its reads. The root writes a read to
+/// the screen before it reads the answer, and the screen is flushed (so answered) before every
+/// keyboard read; a read with nothing to answer it sees the end of input.
+struct Keyboard {
+    first: Cursor<Vec<u8>>,
+    more: Pipe,
+}
+
+impl Read for Keyboard {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.first.read(buf)?;
+        if n > 0 || buf.is_empty() {
+            return Ok(n);
+        }
+        let mut more = self.more.0.lock().unwrap_or_else(|e| e.into_inner());
+        let n = buf.len().min(more.len());
+        for (slot, b) in buf.iter_mut().zip(more.drain(..n)) {
+            *slot = b;
+        }
+        Ok(n)
     }
 }
 

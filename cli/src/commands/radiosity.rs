@@ -101,6 +101,14 @@ pub struct Args {
     /// --features mpi).
     #[arg(long, value_enum, default_value = "inproc")]
     pub transport: super::transport::Kind,
+    /// Bytes of voxels a carm.occ node may keep, its share of the octree and its cache together
+    /// (`--solver carm`; a K, M or G suffix multiplies by 1024, 1024², 1024³). Without it every
+    /// node holds every voxel.
+    #[arg(long, value_name = "BYTES", value_parser = parse_bytes, requires = "cache")]
+    pub node_memory: Option<u64>,
+    /// Bytes of a carm.occ node's voxel cache, part of --node-memory (`--solver carm`).
+    #[arg(long, value_name = "BYTES", value_parser = parse_bytes, requires = "node_memory")]
+    pub cache: Option<u64>,
     /// Longest patch (shooter) edge; default: scene diagonal / 4.
     #[arg(long)]
     pub patch_size: Option<f32>,
@@ -349,6 +357,14 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                 threads,
                 program,
                 load_tolerance: args.load_tolerance,
+                memory: args
+                    .node_memory
+                    .zip(args.cache)
+                    .map(|(node, cache)| carm::Memory {
+                        node,
+                        cache,
+                        store: args.out.join(carm::BACKING_STORE),
+                    }),
             };
             let on_shot = Box::new(progress.on_shot());
             let Some(report) = carm::solve(&mut solver, &settings, on_shot, transport.transport())?
@@ -625,6 +641,10 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
         args.program.is_none() || matches!(args.solver, SolverKind::Carm),
         "--program names a node program for --solver carm"
     );
+    anyhow::ensure!(
+        args.node_memory.is_none() || matches!(args.solver, SolverKind::Carm),
+        "--node-memory and --cache spread carm.occ's voxels: give --solver carm"
+    );
     for (flag, v) in [
         ("--patch-size", args.patch_size),
         ("--element-size", args.element_size),
@@ -780,4 +800,24 @@ fn write_outputs(
         out.display()
     );
     Ok(())
+}
+
+/// A byte count: digits, optionally followed by K, M or G (powers of 1024).
+fn parse_bytes(s: &str) -> Result<u64, String> {
+    let (digits, unit) = match s.trim().char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => (&s.trim()[..i], c.to_ascii_uppercase()),
+        _ => (s.trim(), 'B'),
+    };
+    let shift = match unit {
+        'B' => 0,
+        'K' => 10,
+        'M' => 20,
+        'G' => 30,
+        _ => return Err(format!("{s}: a byte count takes the suffix K, M or G")),
+    };
+    let n: u64 = digits
+        .parse()
+        .map_err(|_| format!("{s}: not a byte count (digits, then K, M or G)"))?;
+    n.checked_mul(1 << shift)
+        .ok_or_else(|| format!("{s}: too many bytes"))
 }

@@ -155,6 +155,15 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: walk::rays_walk as *const u8,
     },
     Intrinsic {
+        name: "RAD.RAYS.WALK.STAMPED",
+        params: &[
+            ValInts, ValReal32s, ValInts, ValReal32s, ValReal32s, VarBools, VarInts, VarInts,
+            VarInts, ValInt, ResultInt,
+        ],
+        result: None,
+        addr: walk::rays_walk_stamped as *const u8,
+    },
+    Intrinsic {
         name: "RAD.VOXEL.OF.POINT",
         params: &[ValInts, ValReal32s, ValReal32s, ResultInt],
         result: None,

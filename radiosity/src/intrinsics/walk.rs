@@ -65,6 +65,61 @@ pub unsafe extern "C" fn rays_walk(
     unsafe { *count = value };
 }
 
+/// `PROC RAD.RAYS.WALK.STAMPED (VAL []INT tree, VAL []REAL32 frame, VAL []INT slot,
+/// VAL []REAL32 pool, VAL []REAL32 rays, []BOOL blocked, []INT cursor, []INT missing,
+/// []INT stamp, VAL INT now, RESULT INT count)`: `RAD.RAYS.WALK`, also setting `stamp[v]` to
+/// `now` for every held voxel `v` a ray tested (voxels beyond `stamp` are not stamped), so that
+/// a cache can evict the least recently used ([`FlatView::walk_stamping`]).
+///
+/// # Safety
+/// As [`rays_walk`]; `stamp` does not overlap the other written arrays.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn rays_walk_stamped(
+    tree: *const i32,
+    tree_len: Word,
+    frame: *const f32,
+    frame_len: Word,
+    slot: *const i32,
+    slot_len: Word,
+    pool: *const f32,
+    pool_len: Word,
+    rays: *const f32,
+    rays_len: Word,
+    blocked: *mut u8,
+    blocked_len: Word,
+    cursor: *mut i32,
+    cursor_len: Word,
+    missing: *mut i32,
+    missing_len: Word,
+    stamp: *mut i32,
+    stamp_len: Word,
+    now: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays; occam's usage rules keep the written ones apart.
+    let written = unsafe {
+        let view = FlatView::new(array(tree, tree_len), array(frame, frame_len));
+        view.and_then(|view| {
+            view.walk_stamping(
+                array(slot, slot_len),
+                array(pool, pool_len),
+                array(rays, rays_len),
+                array_mut(blocked, blocked_len),
+                array_mut(cursor, cursor_len),
+                array_mut(missing, missing_len),
+                array_mut(stamp, stamp_len),
+                now as i32,
+            )
+        })
+    };
+    let value = written.map_or(-1, |n| n as Word);
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = value };
+}
+
 /// `PROC RAD.VOXEL.OF.POINT (VAL []INT tree, VAL []REAL32 frame, VAL []REAL32 p,
 /// RESULT INT voxel)`: the voxel whose leaf holds the point `p` (3 floats) in the flat octree
 /// (`tree`, `frame`), a point on a face between two leaves going to the one on the high side;

@@ -303,6 +303,26 @@ impl<'a> FlatView<'a> {
         cursor: &mut [i32],
         missing: &mut [i32],
     ) -> Option<usize> {
+        self.walk_stamping(slot, pool, rays, blocked, cursor, missing, &mut [], 0)
+    }
+
+    /// [`FlatView::walk`], also setting `stamp[v]` to `now` for every held voxel `v` a ray
+    /// tested (as far as `stamp` reaches), so that a cache can tell which voxels were used last.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the walk's arrays and the stamps"
+    )]
+    pub fn walk_stamping(
+        &self,
+        slot: &[i32],
+        pool: &[f32],
+        rays: &[f32],
+        blocked: &mut [u8],
+        cursor: &mut [i32],
+        missing: &mut [i32],
+        stamp: &mut [i32],
+        now: i32,
+    ) -> Option<usize> {
         let (rays, rest) = rays.as_chunks::<RAY_FLOATS>();
         let n = rays.len();
         let cells = 1i32 << self.depth;
@@ -327,7 +347,7 @@ impl<'a> FlatView<'a> {
                 at[0] = DONE;
                 continue;
             }
-            match self.walk_ray(ray, *at, slot, pool, &mut path) {
+            match self.walk_ray(ray, *at, (slot, pool), &mut path, (&mut *stamp, now)) {
                 Step::Blocked => {
                     *flag = 1;
                     at[0] = DONE;
@@ -347,14 +367,15 @@ impl<'a> FlatView<'a> {
         Some(waiting.len())
     }
 
-    /// One ray's walk from its cursor `at` (not [`DONE`]).
+    /// One ray's walk from its cursor `at` (not [`DONE`]) through the held voxels (`slot`,
+    /// `pool`), stamping each it tests (`stamp`, `now`).
     fn walk_ray(
         &self,
         ray: &[f32; RAY_FLOATS],
         at: [i32; CURSOR_INTS],
-        slot: &[i32],
-        pool: &[f32],
+        (slot, pool): (&[i32], &[f32]),
         path: &mut Path,
+        (stamp, now): (&mut [i32], i32),
     ) -> Step {
         let o = Vec3::new(ray[0], ray[1], ray[2]);
         let d = Vec3::new(ray[3], ray[4], ray[5]);
@@ -388,6 +409,11 @@ impl<'a> FlatView<'a> {
             let held = usize::try_from(offset)
                 .ok()
                 .and_then(|a| pool.get(a..a.checked_add(voxel_floats(packets as usize))?));
+            if held.is_some()
+                && let Some(s) = stamp.get_mut(v)
+            {
+                *s = now;
+            }
             match held {
                 Some(floats) if blocks(floats, packets as usize, &r) => {
                     stop = Some(None);

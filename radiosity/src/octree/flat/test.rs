@@ -412,3 +412,49 @@ fn a_malformed_tree_neither_panics_nor_loops() {
         let _ = view.voxel_at(Vec3::splat(200.0));
     }
 }
+
+#[test]
+fn a_stamping_walk_stamps_the_voxels_its_rays_test_and_answers_the_same() {
+    for (name, tris, config) in scenes() {
+        let tree = Octree::build(&tris, config);
+        let flat = tree.flat().expect("flat");
+        let rays = rays(&tris, 300, 5);
+        for ray in rays.chunks(RAY_FLOATS) {
+            // Nothing held: the walk asks for the voxels the ray tests, one at a time, in order.
+            let mut met = Vec::new();
+            let mut slot = vec![-1; flat.voxel_count()];
+            let mut pool = Vec::new();
+            let (mut blocked, mut cursor, mut missing) = (vec![0], start(1), [0]);
+            while flat
+                .view()
+                .walk(&slot, &pool, ray, &mut blocked, &mut cursor, &mut missing)
+                .expect("well formed")
+                > 0
+            {
+                met.push(missing[0]);
+                slot[missing[0] as usize] = pool.len() as i32;
+                pool.extend_from_slice(flat.voxel(missing[0] as usize));
+            }
+            // Everything held: the same voxels are stamped, and the same answer given.
+            let mut stamp = vec![0; flat.voxel_count()];
+            let (mut again, mut cursor) = (vec![0], start(1));
+            let count = flat.view().walk_stamping(
+                &flat.slots(),
+                flat.pool(),
+                ray,
+                &mut again,
+                &mut cursor,
+                &mut [],
+                &mut stamp,
+                7,
+            );
+            assert_eq!(count, Some(0), "{name}");
+            assert_eq!(again, blocked, "{name}");
+            let stamped: Vec<i32> = (0..stamp.len() as i32)
+                .filter(|&v| stamp[v as usize] == 7)
+                .collect();
+            met.sort_unstable();
+            assert_eq!(stamped, met, "{name}");
+        }
+    }
+}
