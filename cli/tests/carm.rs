@@ -515,6 +515,10 @@ fn carm_refuses_bad_voxel_budgets_by_name() {
             &["--node-memory", "2G", "--cache", "2K"][..],
             "--node-memory 2147483648: carm.occ's voxel pool holds at most 1048576 bytes",
         ),
+        (
+            &["--node-memory", "4K", "--cache", "2K", "--nodes", "200"][..],
+            "too few for 200 nodes each fetching 2 voxels of up to 1056 bytes",
+        ),
         (&["--node-memory", "4096"][..], "--cache"),
         (&["--node-memory", "4096", "--cache", "2Q"][..], "K, M or G"),
     ] {
