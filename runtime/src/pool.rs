@@ -67,6 +67,10 @@ impl PoolState {
     }
 }
 
+/// Times an idle worker looks for a ready node again, yielding its thread between looks, before
+/// it sleeps while another worker runs a node.
+const SPINS: u32 = 64;
+
 /// Timeslices a node runs on a pool thread before it gives way to another ready node.
 pub(crate) const TURN_SLICES: u32 = 4;
 
@@ -290,10 +294,22 @@ fn worker(pool: &PoolShared) {
                 }
             }
         } else {
-            let wait = earliest_due(&st)
-                .map(|d| d.saturating_duration_since(Instant::now()))
-                .unwrap_or(Duration::from_millis(50));
-            st = wait_for(pool, st, wait);
+            // Another worker runs a node, which will likely make one ready soon (a message
+            // between two nodes readies its partner): look again a few times before sleeping,
+            // since a sleep and its wake-up cost far more than a message.
+            let mut spins = 0;
+            while spins < SPINS && st.ready.is_empty() && st.running > 0 {
+                drop(st);
+                std::thread::yield_now();
+                st = pool.lock();
+                spins += 1;
+            }
+            if st.ready.is_empty() {
+                let wait = earliest_due(&st)
+                    .map(|d| d.saturating_duration_since(Instant::now()))
+                    .unwrap_or(Duration::from_millis(50));
+                st = wait_for(pool, st, wait);
+            }
         }
         if all_done(&st) {
             return;
