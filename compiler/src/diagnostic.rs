@@ -93,6 +93,12 @@ pub enum DiagnosticKind {
     /// Occurs when a PRI PAR is nested in the high-priority branch of another (there are only
     /// two priorities). Example: `PRI PAR` / `  PRI PAR` ...
     NestedPriPar,
+    /// Occurs when an extended input `??` reads a timer or a port, which has no outputter to
+    /// hold. Example: `TIMER t:` / `t ?? now` ...
+    ExtendedNotChannel {
+        /// `a timer` or `a port`.
+        what: &'static str,
+    },
     /// Occurs when the exponent of a REAL literal has no sign. Example: `1.0E5` for `1.0E+5`.
     ExponentSign,
     /// Occurs when a FUNCTION or VALOF changes or communicates on something declared outside
@@ -248,6 +254,9 @@ impl DiagnosticKind {
             NotInValof { what } => {
                 format!("{what} is not allowed in a FUNCTION or VALOF (a value process)")
             }
+            ExtendedNotChannel { what } => format!(
+                "an extended input (`??`) needs a channel, and this is {what} (it has no outputter to hold)"
+            ),
             NestedPriPar => {
                 "PRI PAR inside the high-priority branch of a PRI PAR (there are only two priorities)"
                     .into()

@@ -644,6 +644,15 @@ fn children(p: &Process) -> (Vec<&ast::Decl>, Vec<&Process>) {
             }
         }
         ProcessKind::Alt(alt) => alt_children(alt, &mut decls, &mut procs),
+        ProcessKind::Extended {
+            input,
+            during,
+            after,
+        } => {
+            procs.push(&**input);
+            procs.push(&**during);
+            procs.extend(after.as_deref());
+        }
         _ => {}
     }
     (decls, procs)

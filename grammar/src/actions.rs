@@ -430,3 +430,88 @@ pub fn subscripts(base: Expr, indices: Vec<(Expr, usize)>, _r: usize) -> Expr {
         }
     })
 }
+
+/// Accepts the operator token of an extended input: only `??` (`c ?? x`) starts one.
+pub fn ext_query<'a>(
+    u: UserOp,
+    l: usize,
+    r: usize,
+) -> Result<(), ParseError<usize, Token<'a>, Box<Diagnostic>>> {
+    if u == UserOp::DQuery {
+        return Ok(());
+    }
+    let diag = Diagnostic::error(
+        Span::new(l, r),
+        "this operator cannot follow a channel here",
+        "I was expecting `?` (input), `??` (extended input) or `!` (output)",
+    );
+    Err(ParseError::User {
+        error: Box::new(diag),
+    })
+}
+
+/// Builds the ALT alternative `[cond &] c ?? x` with its process run while the outputter is
+/// held and, if written, its process run after the release. The grammar reads `c ?? x` as the
+/// expression it also spells (a guard's condition is an expression too); `data` is the array of
+/// a counted first item (`c ?? n::a`), `items` the rest.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one per part of the alternative as written"
+)]
+pub fn extended_alternative<'a>(
+    cond: Option<Expr>,
+    x: Expr,
+    data: Option<Expr>,
+    mut items: Vec<IoItem>,
+    during: Process,
+    after: Option<Process>,
+    l: usize,
+    r: usize,
+) -> Result<Alternative, ParseError<usize, Token<'a>, Box<Diagnostic>>> {
+    let span = x.span;
+    let ExprKind::Binary {
+        op: BinOp::User(UserOp::DQuery),
+        lhs,
+        rhs,
+    } = x.kind
+    else {
+        let diag = Diagnostic::error(
+            span,
+            "this is not a guard",
+            "I was expecting an input `c ? x`, an extended input `c ?? x`, a delay or SKIP",
+        );
+        return Err(ParseError::User {
+            error: Box::new(diag),
+        });
+    };
+    let first = match data {
+        Some(data) => IoItem::Counted { count: *rhs, data },
+        None => IoItem::Expr(*rhs),
+    };
+    items.insert(0, first);
+    let input = Process {
+        kind: ProcessKind::Input { chan: *lhs, items },
+        span,
+    };
+    let body = after.unwrap_or(Process {
+        kind: ProcessKind::Skip,
+        span: Span::new(r, r),
+    });
+    let guard = Process {
+        span: span.to(during.span),
+        kind: ProcessKind::Extended {
+            input: Box::new(input),
+            during: Box::new(during),
+            after: None,
+        },
+    };
+    Ok(Alternative {
+        decls: Vec::new(),
+        kind: AltKind::Guarded {
+            cond,
+            guard: Box::new(guard),
+            body: Box::new(body),
+        },
+        span: Span::new(l, r),
+    })
+}

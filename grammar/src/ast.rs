@@ -791,6 +791,17 @@ pub enum ProcessKind {
         /// The items, in order.
         items: Vec<IoItem>,
     },
+    /// occam-pi's extended rendezvous: `c ?? x; y` (or `c ?? CASE tag; x`) then an indented
+    /// process `during` and optionally a second, `after`. The inputter receives, runs `during`
+    /// while the outputter stays blocked, releases the outputter, then runs `after`.
+    Extended {
+        /// The input, a [`ProcessKind::Input`] or a one-variant [`ProcessKind::CaseInput`].
+        input: Box<Process>,
+        /// The process run while the outputter is held.
+        during: Box<Process>,
+        /// The process run after the outputter is released.
+        after: Option<Box<Process>>,
+    },
     /// `c ? CASE` with indented variants, or the one-line `c ? CASE tag; x` (one variant, body SKIP).
     CaseInput {
         /// The channel.
@@ -948,7 +959,8 @@ pub struct Alternative {
 #[derive(Debug, Clone, PartialEq)]
 pub enum AltKind {
     /// `[cond &] guard` then an indented process. `guard` is a [`ProcessKind::Input`],
-    /// [`ProcessKind::Delay`] or [`ProcessKind::Skip`].
+    /// [`ProcessKind::Delay`] or [`ProcessKind::Skip`], or a [`ProcessKind::Extended`] input
+    /// (`c ?? x` and its first process; `body` is then its second process, or SKIP).
     Guarded {
         /// The boolean pre-condition (`cond & ...`).
         cond: Option<Expr>,

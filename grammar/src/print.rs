@@ -345,6 +345,19 @@ impl Printer {
             ProcessKind::Input { chan, items } => {
                 self.line(&format!("{} ? {}", expr(chan), items_s(items)))
             }
+            ProcessKind::Extended {
+                input,
+                during,
+                after,
+            } => {
+                self.line(&extended_s(input));
+                self.nested(|p| {
+                    p.process(during);
+                    if let Some(after) = after {
+                        p.process(after);
+                    }
+                });
+            }
             ProcessKind::CaseInput { chan, variants } => {
                 self.line(&format!("{} ? CASE", expr(chan)));
                 self.nested(|p| p.variants(variants));
@@ -444,6 +457,14 @@ impl Printer {
         };
         match kind {
             AltKind::Guarded { cond, guard, body } => {
+                if let ProcessKind::Extended { input, during, .. } = &guard.kind {
+                    self.line(&format!("{}{}", cond_s(cond), extended_s(input)));
+                    self.nested(|p| {
+                        p.process(during);
+                        p.process(body);
+                    });
+                    return;
+                }
                 let guard = match &guard.kind {
                     ProcessKind::Input { chan, items } => {
                         format!("{} ? {}", expr(chan), items_s(items))
@@ -771,5 +792,23 @@ fn escape(s: &mut String, b: u8, quote: u8) {
         _ => {
             let _ = write!(s, "*#{b:02X}");
         }
+    }
+}
+
+/// The first line of an extended input: `c ?? x; y` or `c ?? CASE tag; x`.
+fn extended_s(input: &Process) -> String {
+    match &input.kind {
+        ProcessKind::Input { chan, items } => format!("{} ?? {}", expr(chan), items_s(items)),
+        ProcessKind::CaseInput { chan, variants } => {
+            let mut text = format!("{} ?? CASE", expr(chan));
+            if let [v] = variants.as_slice() {
+                let _ = write!(text, " {}", v.tag.text);
+                for item in &v.items {
+                    let _ = write!(text, "; {}", item_s(item));
+                }
+            }
+            text
+        }
+        _ => "SKIP".to_string(),
     }
 }

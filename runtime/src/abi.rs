@@ -64,6 +64,12 @@
 //! returns the selected branch number, on which the code switches. The selected channel branch
 //! then performs an ordinary `rt_in`. Every guard enabled must be disabled.
 //!
+//! # Extended rendezvous
+//!
+//! `c ?? x` + P: each communication of the input is `rt_xwait` (blocking: waits for the
+//! outputter as a one-guard ALT) then `rt_xin` (takes the data, leaves the outputter descheduled
+//! in a workspace word `held`); before the next communication and after P, `rt_xend` releases it.
+//!
 //! # Emitted code, by example
 //!
 //! `PROC relay (CHAN INT in?, out!)` = `WHILE TRUE SEQ { in ? x; out ! x }`, locals: 0 = `in`
@@ -401,6 +407,12 @@ entries! {
     Error = "rt_error", true, [Ptr, Ptr, W, W] -> St;
     /// `rt_placement(node, ws) -> Word`
     Placement = "rt_placement", false, [Ptr, Ptr] -> W;
+    /// `rt_xwait(node, ws, chan) -> Status`
+    Xwait = "rt_xwait", true, [Ptr, Ptr, Ptr] -> St;
+    /// `rt_xin(node, ws, chan, data, len, held) -> Status`
+    Xin = "rt_xin", true, [Ptr, Ptr, Ptr, Ptr, W, Ptr] -> St;
+    /// `rt_xend(node, ws, held) -> Status`
+    Xend = "rt_xend", true, [Ptr, Ptr, Ptr] -> St;
 }
 
 #[cfg(test)]

@@ -271,3 +271,89 @@ impl Node {
         }
     }
 }
+
+/// Extended rendezvous (occam-pi `c ?? x`), first step: waits until an outputter is parked in
+/// channel `chan`, without taking its data. Blocking point.
+///
+/// An empty word is enabled as a one-guard ALT (the word holds the caller's descriptor tagged
+/// `ALT`, the caller is Waiting): the outputter that arrives sees an ALTing reader, parks itself
+/// and makes the caller ready, exactly as for an ALT, so outputters need no extended form. After
+/// this returns (or the caller resumes), [`rt_xin`] finds the outputter in the word. An endpoint
+/// word needs no wait.
+///
+/// # Safety
+/// As for [`rt_in`].
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn rt_xwait(node: *mut Node, ws: Wptr, chan: *mut Word) -> Status {
+    // SAFETY: the caller passes the running node and a valid channel word.
+    let (node, w) = unsafe { (&mut *node, *chan) };
+    if w != NOT_PROCESS {
+        return Status::DONE;
+    }
+    // SAFETY: `ws` is the running frame; it waits as a one-guard ALT.
+    unsafe {
+        *chan = node.desc(ws) | tag::ALT;
+        set(ws, slot::STATE, alt_state::WAITING);
+        node.note_blocked(ws, chan as Word);
+    }
+    Status::BLOCKED
+}
+
+/// Extended rendezvous, second step: takes `len` bytes from the outputter parked in `chan` (after
+/// [`rt_xwait`]) into `data` and empties the word, but does not reschedule the outputter: its
+/// descriptor goes to `*held`, for [`rt_xend`] once the extended process has ended. Blocking
+/// point (an endpoint word performs an ordinary input, and a channel to another node cannot hold
+/// its outputter: `*held` is then [`NOT_PROCESS`]).
+///
+/// # Safety
+/// As for [`rt_in`]; [`rt_xwait`] has returned for `chan` with no other input since, and `held`
+/// is a workspace word holding [`NOT_PROCESS`].
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn rt_xin(
+    node: *mut Node,
+    ws: Wptr,
+    chan: *mut Word,
+    data: *mut u8,
+    len: Word,
+    held: *mut Word,
+) -> Status {
+    // SAFETY: the caller passes the running node and a valid channel word.
+    let (node, w) = unsafe { (&mut *node, *chan) };
+    if w & tag::ENDPOINT != 0 {
+        // SAFETY: an ENDPOINT word always points at one of this node's endpoints.
+        return unsafe { in_endpoint(node, ws, chan, w, data, len) };
+    }
+    debug_assert!(
+        w != NOT_PROCESS && w & tag::ALT == 0,
+        "rt_xin without an outputter"
+    );
+    // SAFETY: an outputter is parked in the word; its POINTER slot is valid for `len` bytes.
+    unsafe {
+        let src = get(wptr(w), slot::POINTER) as *const u8;
+        copy(src, data, len);
+        *chan = NOT_PROCESS;
+        *held = w;
+    }
+    node.stats.communications += 1;
+    Status::DONE
+}
+
+/// Extended rendezvous, last step: releases the outputter that [`rt_xin`] left in `*held` (at
+/// the back of its run queue) and empties `*held`; nothing if it is empty. Blocking point (a
+/// low-priority process gives way to a released high-priority one).
+///
+/// # Safety
+/// `node` is the running node, `ws` the calling frame, `held` a workspace word that holds
+/// [`NOT_PROCESS`] or a descriptor that [`rt_xin`] stored.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn rt_xend(node: *mut Node, ws: Wptr, held: *mut Word) -> Status {
+    // SAFETY: caller contract.
+    let (node, w) = unsafe { (&mut *node, *held) };
+    if w == NOT_PROCESS {
+        return Status::DONE;
+    }
+    // SAFETY: caller contract.
+    unsafe { *held = NOT_PROCESS };
+    node.schedule(w);
+    node.continue_or_preempt(ws)
+}

@@ -86,6 +86,12 @@ fn guard_of(a: &Alternative) -> Option<Guard<'_>> {
             ProcessKind::Input { chan, .. } | ProcessKind::CaseInput { chan, .. } => {
                 Some(Guard::Chan(chan))
             }
+            ProcessKind::Extended { input, .. } => match &input.kind {
+                ProcessKind::Input { chan, .. } | ProcessKind::CaseInput { chan, .. } => {
+                    Some(Guard::Chan(chan))
+                }
+                _ => None,
+            },
             ProcessKind::Delay { time, .. } => Some(Guard::Timer(time)),
             ProcessKind::Skip => Some(Guard::Skip),
             _ => None,
@@ -422,7 +428,10 @@ impl Tr<'_, '_> {
     fn run_alternative(&mut self, a: &Alternative) -> Res<()> {
         match &a.kind {
             AltKind::Guarded { guard, body, .. } => {
-                if let ProcessKind::Input { .. } | ProcessKind::CaseInput { .. } = &guard.kind {
+                if let ProcessKind::Input { .. }
+                | ProcessKind::CaseInput { .. }
+                | ProcessKind::Extended { .. } = &guard.kind
+                {
                     self.process(guard)?;
                 }
                 self.process(body)

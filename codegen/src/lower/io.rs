@@ -5,7 +5,7 @@
 use cranelift_codegen::ir::{InstBuilder, Value, condcodes::IntCC, types};
 use cranelift_frontend::Switch;
 use occ_compiler::types::{ChanProtocol, ProtocolItem, ProtocolKind, Type};
-use occ_grammar::ast::{Expr, ExprKind, IoItem, Span, Variant};
+use occ_grammar::ast::{Expr, ExprKind, IoItem, Process, Span, Variant};
 use occ_runtime::ErrorKind;
 use occ_runtime::abi::{
     Entry, NODE_COMMUNICATIONS_OFFSET, NODE_CUR_PRI_OFFSET, NODE_QUEUES_OFFSET, NOT_PROCESS,
@@ -274,19 +274,25 @@ impl Tr<'_, '_> {
     pub fn input_item(&mut self, chan: &Expr, item: &IoItem, span: Span) -> Res<()> {
         match item {
             IoItem::Expr(x) => {
+                self.extended_ready(chan, span)?;
                 let ty = self.cx.type_of(x)?;
                 let l = self.place(x)?;
                 if is_scalar(&self.cx.checked.types, &ty) {
                     let len = size_of(&self.cx.checked.types, &ty).unwrap_or(WORD);
                     let c = self.chan_addr(chan)?;
+                    if self.held.is_some() {
+                        let len = self.iconst(len);
+                        return self.receive(c, l.addr, len, span);
+                    }
                     return self.communicate(false, c, l.addr, len, span);
                 }
                 let size = self.loc_size(&l, x.span)?;
                 let c = self.chan_addr(chan)?;
-                self.blocking(Entry::In, &[self.node, self.ws, c, l.addr, size], span)
+                self.receive(c, l.addr, size, span)
             }
             IoItem::Counted { count, data } => {
                 self.input_item(chan, &IoItem::Expr(count.clone()), span)?;
+                self.extended_ready(chan, span)?;
                 let n = self.int_index(count)?;
                 let l = self.place(data)?;
                 if let Some(&dim) = l.dims.first() {
@@ -296,18 +302,73 @@ impl Tr<'_, '_> {
                 let es = self.elem_size(&l, span)?;
                 let size = self.b.ins().imul(n, es);
                 let c = self.chan_addr(chan)?;
-                self.blocking(Entry::In, &[self.node, self.ws, c, l.addr, size], span)
+                self.receive(c, l.addr, size, span)
             }
+        }
+    }
+
+    /// One input of `len` bytes into `data` from channel word `chan` through the runtime: `rt_in`,
+    /// or inside an extended input `rt_xin`, which leaves the outputter held.
+    fn receive(&mut self, chan: Value, data: Value, len: Value, span: Span) -> Res<()> {
+        match self.held {
+            None => self.blocking(Entry::In, &[self.node, self.ws, chan, data, len], span),
+            Some(off) => {
+                let held = self.local_addr(off);
+                let args = [self.node, self.ws, chan, data, len, held];
+                self.blocking(Entry::Xin, &args, span)
+            }
+        }
+    }
+
+    /// Inside an extended input, before each communication: releases the outputter that the
+    /// previous one held (only the last stays held: it is the end of the outputter's output)
+    /// and waits until the outputter is in the channel. Nothing outside one. Addresses computed
+    /// before this call do not survive it.
+    fn extended_ready(&mut self, chan: &Expr, span: Span) -> Res<()> {
+        let Some(off) = self.held else {
+            return Ok(());
+        };
+        let held = self.local_addr(off);
+        self.blocking(Entry::Xend, &[self.node, self.ws, held], span)?;
+        let c = self.chan_addr(chan)?;
+        self.blocking(Entry::Xwait, &[self.node, self.ws, c], span)
+    }
+
+    /// occam-pi's extended rendezvous, `c ?? x` then `during` and `after`: the input holds the
+    /// outputter (each communication goes through `rt_xwait` and `rt_xin`), `during` runs,
+    /// `rt_xend` releases the outputter, then `after` runs.
+    pub fn extended(
+        &mut self,
+        input: &Process,
+        during: &Process,
+        after: Option<&Process>,
+        span: Span,
+    ) -> Res<()> {
+        let off = self.frame.alloc_word();
+        let held = self.local_addr(off);
+        let empty = self.iconst(NOT_PROCESS);
+        self.b.ins().store(mem(), empty, held, 0);
+        let outer = self.held.replace(off);
+        let received = self.process(input);
+        self.held = outer;
+        received?;
+        self.process(during)?;
+        let held = self.local_addr(off);
+        self.blocking(Entry::Xend, &[self.node, self.ws, held], span)?;
+        match after {
+            Some(after) => self.process(after),
+            None => Ok(()),
         }
     }
 
     /// `chan ? CASE` with variants.
     pub fn case_input(&mut self, chan: &Expr, variants: &[Variant], span: Span) -> Res<()> {
         let off = self.frame.alloc_word();
+        self.extended_ready(chan, span)?;
         let a = self.local_addr(off);
         let c = self.chan_addr(chan)?;
         let one = self.iconst(1);
-        self.blocking(Entry::In, &[self.node, self.ws, c, a, one], span)?;
+        self.receive(c, a, one, span)?;
         self.tag_dispatch(chan, off, variants, span)
     }
 

@@ -270,6 +270,7 @@ impl<'p> Compiler<'p> {
                 exit,
                 in_expr: 0,
                 no_poll: 0,
+                held: None,
                 channels: Vec::new(),
             };
             let r = body(&mut tr);
@@ -318,6 +319,9 @@ pub struct Tr<'a, 'p> {
     pub no_poll: u32,
     /// Channels declared in this frame (for deadlock reports).
     pub channels: Vec<ChannelName>,
+    /// While lowering the input of an extended rendezvous (`c ?? x`): the frame offset of the
+    /// word that holds the outputter not yet released (see [`Entry::Xin`]).
+    pub held: Option<i32>,
 }
 
 /// Memory flags for workspace data (not necessarily aligned).

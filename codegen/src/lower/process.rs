@@ -42,6 +42,11 @@ impl Tr<'_, '_> {
             ProcessKind::Output { chan, items } => self.output(chan, items, p.span),
             ProcessKind::Input { chan, items } => self.input(chan, items, p.span),
             ProcessKind::CaseInput { chan, variants } => self.case_input(chan, variants, p.span),
+            ProcessKind::Extended {
+                input,
+                during,
+                after,
+            } => self.extended(input, during, after.as_deref(), p.span),
             ProcessKind::Delay { time, .. } => {
                 let t = self.expr(time)?;
                 let t = self.b.ins().sextend(types::I64, t);

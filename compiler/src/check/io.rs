@@ -55,6 +55,22 @@ impl Checker {
         self.communicate(end, items, true, span);
     }
 
+    /// Checks the input of an extended rendezvous, `chan ?? items`: as `chan ? items`, on a
+    /// channel only.
+    pub(super) fn extended_input(&mut self, chan: &Expr, items: &[IoItem], span: ast::Span) {
+        let end = self.end(chan, Mode::Input);
+        let what = match end {
+            End::Timer => Some("a timer"),
+            End::Port(_) => Some("a port"),
+            _ => None,
+        };
+        if let Some(what) = what {
+            self.error(DiagnosticKind::ExtendedNotChannel { what }, chan.span);
+            return;
+        }
+        self.communicate(end, items, true, span);
+    }
+
     fn communicate(&mut self, end: End, items: &[IoItem], input: bool, span: ast::Span) {
         match end {
             End::Chan(ChanProtocol::Any) | End::Unknown => {

@@ -34,6 +34,22 @@ impl Checker {
             ProcessKind::Output { chan, items } => self.output(chan, items, p.span),
             ProcessKind::Input { chan, items } => self.input(chan, items, p.span),
             ProcessKind::CaseInput { chan, variants } => self.case_input(chan, variants),
+            ProcessKind::Extended {
+                input,
+                during,
+                after,
+            } => {
+                match &input.kind {
+                    ProcessKind::Input { chan, items } => {
+                        self.extended_input(chan, items, input.span)
+                    }
+                    _ => self.process(input),
+                }
+                self.process(during);
+                if let Some(after) = after {
+                    self.process(after);
+                }
+            }
             ProcessKind::Delay { timer, time } => self.delay(timer, time),
             ProcessKind::Seq { repl, body } => {
                 let mark = self.open_scope();

@@ -88,6 +88,8 @@ fn predefines() -> HashMap<String, Value> {
     let mut defines = HashMap::new();
     defines.insert("TARGET.BITS.PER.WORD".to_string(), Value::Int(32));
     defines.insert("OCC".to_string(), Value::Bool(true));
+    // As KRoC: occam-pi's extended rendezvous (`c ?? x` then a process) is supported.
+    defines.insert("EXTENDED.RENDEZVOUS".to_string(), Value::Bool(true));
     defines
 }
 
