@@ -46,23 +46,32 @@ pub unsafe extern "C" fn rays_walk(
     missing_len: Word,
     count: *mut Word,
 ) {
-    // SAFETY: the ABI passes valid arrays; occam's usage rules keep the written ones apart.
-    let written = unsafe {
-        let view = FlatView::new(array(tree, tree_len), array(frame, frame_len));
-        view.and_then(|view| {
-            view.walk(
-                array(slot, slot_len),
-                array(pool, pool_len),
-                array(rays, rays_len),
-                array_mut(blocked, blocked_len),
-                array_mut(cursor, cursor_len),
-                array_mut(missing, missing_len),
-            )
-        })
-    };
-    let value = written.map_or(-1, |n| n as Word);
-    // SAFETY: the ABI passes a valid result address.
-    unsafe { *count = value };
+    // The stamping walk with no stamps to set (an empty `stamp` is never written).
+    // SAFETY: the caller's contract is this one's.
+    unsafe {
+        rays_walk_stamped(
+            tree,
+            tree_len,
+            frame,
+            frame_len,
+            slot,
+            slot_len,
+            pool,
+            pool_len,
+            rays,
+            rays_len,
+            blocked,
+            blocked_len,
+            cursor,
+            cursor_len,
+            missing,
+            missing_len,
+            std::ptr::null_mut(),
+            0,
+            0,
+            count,
+        )
+    }
 }
 
 /// `PROC RAD.RAYS.WALK.STAMPED (VAL []INT tree, VAL []REAL32 frame, VAL []INT slot,
