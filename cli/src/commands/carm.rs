@@ -110,6 +110,8 @@ pub struct CarmReport {
     pub nodes: Vec<NodeCounters>,
     /// Per link direction.
     pub links: Vec<LinkCounters>,
+    /// The PROCs, FUNCTIONs and intrinsics of the program that nothing calls, not compiled.
+    pub left_out: occ_codegen::reach::LeftOut,
 }
 
 /// Runs carm.occ on `solver`'s scene and mesh and books its solution into `solver` (irradiance,
@@ -201,7 +203,10 @@ pub fn solve(
         text
     );
     let booked = book(solver, &out)?;
-    Ok(Some(report(&outcome, booked)))
+    Ok(Some(CarmReport {
+        left_out: compiled.left_out,
+        ..report(&outcome, booked)
+    }))
 }
 
 /// The values of carm.occ's capacities (`VAL INT NAME IS n:` in its capacities block) for
@@ -700,7 +705,11 @@ fn report(outcome: &NetworkOutcome, booked: Booked) -> CarmReport {
             bytes: l.bytes,
         })
         .collect();
-    CarmReport { nodes, links }
+    CarmReport {
+        nodes,
+        links,
+        ..CarmReport::default()
+    }
 }
 
 /// Little-endian writer of the host protocol.
