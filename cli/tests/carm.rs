@@ -649,3 +649,23 @@ fn carm_refuses_bad_voxel_budgets_by_name() {
     assert!(!output.status.success());
     assert!(String::from_utf8_lossy(&output.stderr).contains("give --solver carm"));
 }
+
+/// report.json lists the intrinsics of `radiosity.inc` that carm.occ never calls, left out of
+/// its compiled program.
+#[test]
+fn carm_lists_the_intrinsics_it_does_not_call() {
+    let (_, report) = &carm_runs()[0];
+    let left_out: Vec<&str> = report["left_out"]
+        .as_array()
+        .expect("left_out is a list")
+        .iter()
+        .filter_map(|v| v.as_str())
+        .filter(|l| l.starts_with("carm.occ: "))
+        .collect();
+    assert_eq!(left_out.len(), 1, "{report}");
+    assert!(
+        left_out[0].contains(" intrinsics not compiled: nothing calls them"),
+        "{}",
+        left_out[0]
+    );
+}

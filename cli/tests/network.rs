@@ -181,3 +181,40 @@ fn bad_settings_are_refused() {
         assert!(err.contains(why), "{args:?}: {err}");
     }
 }
+
+/// Only what a `PLACED PAR`'s branches call is compiled: `--stats` counts the course library's
+/// PROCs left out, and the output is the one of `--all-routines`, which compiles them all.
+#[test]
+fn stats_count_the_routines_nothing_calls() {
+    let dir = std::env::temp_dir().join(format!("occ-net-lean-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("lean.occ");
+    std::fs::write(
+        &file,
+        "#INCLUDE \"course.module\"\n\
+         PROC unused (CHAN INT c!)\n  c ! 1\n:\n\
+         PROC produce (CHAN INT c!)\n  c ! 42\n:\n\
+         PROC main (CHAN BYTE keyboard?, screen!, error!)\n  CHAN INT c:\n  PLACED PAR\n    \
+         PROCESSOR 0\n      INT x:\n      SEQ\n        c ? x\n        out.int (x, 0, screen!)\n        \
+         screen ! '*n'\n    PROCESSOR 1\n      produce (c!)\n:\n",
+    )
+    .expect("write test program");
+    let lean = occ_run(&file, &["--stats", "--threads", "1"]);
+    let all = occ_run(&file, &["--stats", "--threads", "1", "--all-routines"]);
+    assert!(lean.status.success(), "{}", text(&lean.stderr));
+    assert!(all.status.success(), "{}", text(&all.stderr));
+    assert_eq!(text(&lean.stdout), "42\n");
+    assert_eq!(text(&all.stdout), text(&lean.stdout));
+    let line = text(&lean.stderr)
+        .lines()
+        .find(|l| l.starts_with("left out: "))
+        .map(str::to_string)
+        .unwrap_or_else(|| panic!("no left-out line:\n{}", text(&lean.stderr)));
+    assert!(
+        line.contains(" PROCs and FUNCTIONs")
+            && line.ends_with(" not compiled: nothing calls them"),
+        "{line}"
+    );
+    assert!(!text(&all.stderr).contains("left out: "));
+    let _ = std::fs::remove_dir_all(&dir);
+}

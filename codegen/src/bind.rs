@@ -34,11 +34,25 @@ pub struct Bindings {
 
 /// Binds every EXTERNAL of `checked` to an intrinsic of `set`.
 pub fn bind_externals(checked: &CheckedProgram, set: &IntrinsicSet) -> Bindings {
+    bind_some(checked, set, |_| true)
+}
+
+/// Binds the EXTERNALs of `checked` that `wanted` accepts to intrinsics of `set`; the others
+/// are neither bound nor checked. Code generation binds only those its program calls
+/// ([`crate::reach`]); the front end checks them all.
+pub fn bind_some(
+    checked: &CheckedProgram,
+    set: &IntrinsicSet,
+    wanted: impl Fn(SymbolId) -> bool,
+) -> Bindings {
     let mut out = Bindings::default();
     for (id, sym) in checked.symbols.iter() {
         let SymbolKind::External(pid) = sym.kind else {
             continue;
         };
+        if !wanted(id) {
+            continue;
+        }
         let Some(i) = set.find(&sym.name) else {
             let mut uses: Vec<Span> = checked
                 .names

@@ -16,6 +16,7 @@ pub mod jit;
 pub mod layout;
 pub mod lower;
 pub mod network;
+pub mod reach;
 mod spread;
 
 use std::sync::Arc;
@@ -50,6 +51,8 @@ pub struct Compiled {
     pub network: Option<network::NetworkLayout>,
     /// Tables for error and deadlock reports.
     pub info: Arc<ProgramInfo>,
+    /// The routines left out: nothing the entry PROC runs calls them ([`reach`]).
+    pub left_out: reach::LeftOut,
 }
 
 impl Drop for Compiled {
@@ -96,21 +99,58 @@ pub fn compile(
 /// Compiles `program` (checked as `checked`, spans mapped by `map`), binding its
 /// `#PRAGMA EXTERNAL` routines to the intrinsics of `intrinsics` ([`bind`]); the entry point is
 /// its last top-level PROC, which must take up to three `CHAN BYTE` parameters (keyboard,
-/// screen, error).
+/// screen, error). Only the routines the entry PROC reaches are compiled and bound
+/// ([`reach`]): an EXTERNAL that no linked table has is an error here only where reachable
+/// code calls it (the front end reports every call).
 pub fn compile_with(
     program: &ast::Program,
     checked: &CheckedProgram,
     map: &SourceMap,
     intrinsics: &IntrinsicSet,
 ) -> Result<Compiled, CodegenError> {
-    let mut cx = Compiler::new(checked, map, intrinsics)?;
-    let mut entry = None;
+    compile_keeping(program, checked, map, intrinsics, false)
+}
+
+/// [`compile_with`], or with `everything` every PROC compiled and every EXTERNAL bound whether
+/// or not anything calls it (`occ run --all-routines`: the old behaviour, for comparison).
+pub fn compile_keeping(
+    program: &ast::Program,
+    checked: &CheckedProgram,
+    map: &SourceMap,
+    intrinsics: &IntrinsicSet,
+    everything: bool,
+) -> Result<Compiled, CodegenError> {
+    let entry = program.decls.iter().rev().find_map(|d| match &d.kind {
+        DeclKind::Proc { name, .. } => Some(name),
+        _ => None,
+    });
+    let name = entry.ok_or(CodegenError::NoEntry)?;
+    let entry_sym = checked
+        .names
+        .get(&name.span)
+        .copied()
+        .or_else(|| {
+            checked
+                .symbols
+                .iter()
+                .find(|(_, s)| s.span == name.span)
+                .map(|(id, _)| id)
+        })
+        .ok_or(CodegenError::NoEntry)?;
+    let reach = if everything {
+        reach::Reach::everything(checked)
+    } else {
+        reach::reach(checked, entry_sym)
+    };
+    let mut cx = Compiler::new(checked, map, intrinsics, reach)?;
     for d in &program.decls {
         match &d.kind {
             DeclKind::Proc { name, .. } => {
-                cx.compile_proc(d, 1)?;
-                entry = Some(name);
+                if cx.needed(name)? {
+                    cx.compile_proc(d, 1)?;
+                }
             }
+            DeclKind::Function { name, .. } if !cx.needed(name)? => {}
             DeclKind::Function { name, .. } => {
                 let sym = cx.symbol(name)?;
                 cx.env
@@ -131,7 +171,6 @@ pub fn compile_with(
             _ => return Err(cx.unsupported(d.span, "this top-level declaration")),
         }
     }
-    let name = entry.ok_or(CodegenError::NoEntry)?;
     let sym = cx.symbol(name)?;
     let Some(Storage::Proc(e)) = cx.env.get(&sym).cloned() else {
         return Err(CodegenError::NoEntry);
@@ -160,7 +199,11 @@ pub fn compile_with(
     // SAFETY: as above.
     let entry_fn: ProcFn = unsafe { std::mem::transmute::<*const u8, ProcFn>(code) };
     let Compiler {
-        jit, data, network, ..
+        jit,
+        data,
+        network,
+        reach,
+        ..
     } = cx;
     Ok(Compiled {
         module: Some(jit.module),
@@ -181,6 +224,7 @@ pub fn compile_with(
             .collect(),
         network,
         info: Arc::new(info),
+        left_out: reach.left_out,
     })
 }
 

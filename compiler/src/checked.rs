@@ -97,6 +97,9 @@ pub struct ProcInfo {
     pub name: String,
     /// Its symbol.
     pub symbol: Option<SymbolId>,
+    /// The whole declaration, from `PROC` or the result types to the closing `:` (for an
+    /// EXTERNAL, the header in its pragma): every name used in its body is inside.
+    pub span: Span,
     /// The formal parameters' symbols, in order.
     pub params: Vec<SymbolId>,
     /// The result types (empty for a PROC).

@@ -161,6 +161,8 @@ pub struct CarmReport {
     pub nodes: Vec<NodeCounters>,
     /// Per link direction.
     pub links: Vec<LinkCounters>,
+    /// The PROCs, FUNCTIONs and intrinsics of the program that nothing calls, not compiled.
+    pub left_out: occ_codegen::reach::LeftOut,
 }
 
 /// Runs carm.occ on `solver`'s scene and mesh and books its solution into `solver` (irradiance,
@@ -266,7 +268,10 @@ pub fn solve(
             let reads = reads.lock().unwrap_or_else(|e| e.into_inner()).clone();
             (m.node, shares, reads)
         });
-    Ok(Some(report(&outcome, booked, memory)))
+    Ok(Some(CarmReport {
+        left_out: compiled.left_out,
+        ..report(&outcome, booked, memory)
+    }))
 }
 
 /// The values of carm.occ's capacities (`VAL INT NAME IS n:` in its capacities block) for
@@ -938,7 +943,11 @@ fn report(
             bytes: l.bytes,
         })
         .collect();
-    CarmReport { nodes, links }
+    CarmReport {
+        nodes,
+        links,
+        ..CarmReport::default()
+    }
 }
 
 /// Little-endian writer of the host protocol.

@@ -373,6 +373,9 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                 return Ok(ExitCode::SUCCESS);
             };
             progress.done();
+            if let Some(line) = carm_left_out(&args, &report).filter(|_| reports) {
+                eprintln!("note: left out: {line}");
+            }
             Some(report)
         }
     };
@@ -479,6 +482,15 @@ fn print_stages(solver: &Solver) {
     for added in solver.stages.added() {
         eprintln!("note: {added}");
     }
+}
+
+/// What code generation left out of the node program (carm.occ or `--program`), in one line.
+fn carm_left_out(args: &Args, net: &carm::CarmReport) -> Option<String> {
+    let name = args
+        .program
+        .as_ref()
+        .map_or_else(|| "carm.occ".to_string(), |p| p.display().to_string());
+    net.left_out.describe(&name)
 }
 
 /// Progress on stderr: a line per stage, and during shooting a line that rewrites itself on a
@@ -754,6 +766,9 @@ fn write_outputs(
         let errors = truth::object_errors(&names, &means, truth);
         print!("{}", truth::error_table(&errors));
         rep.truth = Some(errors);
+    }
+    if let Some(line) = network.and_then(|net| carm_left_out(args, net)) {
+        rep.left_out.push(line);
     }
     // carm.occ's report: the same, with its nodes' and links' counters.
     let mut json = serde_json::to_value(&rep)?;

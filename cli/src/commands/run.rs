@@ -1,4 +1,4 @@
-//! `occ run FILE.occ [-I DIR] [--stats] [--topology SHAPE | --nodes N] [--threads T]
+//! `occ run FILE.occ [-I DIR] [--stats] [--all-routines] [--topology SHAPE | --nodes N] [--threads T]
 //! [--node-memory BYTES] [--link-speed RATE] [--transport inproc|mpi]`: preprocess, parse, check, compile with Cranelift
 //! and run.
 //!
@@ -39,6 +39,10 @@ pub struct Args {
     /// memory) and per-link traffic.
     #[arg(long)]
     pub stats: bool,
+    /// Compile every PROC and bind every `#PRAGMA EXTERNAL` intrinsic, even those nothing
+    /// calls (by default they are left out; `--stats` counts them).
+    #[arg(long)]
+    pub all_routines: bool,
     /// Run the last PROC as a node program on this network shape: tree3:N, pipeline:N,
     /// ring:N, grid:WxH or hypercube:D.
     #[arg(long, value_name = "SHAPE", conflicts_with = "nodes")]
@@ -79,7 +83,21 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     };
     let (program, map) = (&front.parsed.program, &front.parsed.map);
     let set = frontend::intrinsics();
-    let compiled = match occ_codegen::compile_with(program, &front.checked, map, &set) {
+    let started = std::time::Instant::now();
+    let compiled =
+        occ_codegen::compile_keeping(program, &front.checked, map, &set, args.all_routines);
+    let compiled = match compiled {
+        Ok(compiled) if args.stats && reports => {
+            let file = args.file.display().to_string();
+            eprintln!(
+                "code generation: {:.1} ms",
+                started.elapsed().as_secs_f64() * 1e3
+            );
+            if let Some(line) = compiled.left_out.describe(&file) {
+                eprintln!("left out: {line}");
+            }
+            compiled
+        }
         Ok(compiled) => compiled,
         Err(error) => {
             for d in error.diagnostics().iter().filter(|_| reports) {

@@ -67,6 +67,8 @@ impl Tr<'_, '_> {
                 self.retype(sym, ty, written, src.addr, size)
             }
             DeclKind::DataType { .. } | DeclKind::Protocol { .. } => Ok(()),
+            DeclKind::Proc { name, .. } if !self.cx.needed(name)? => Ok(()),
+            DeclKind::Function { name, .. } if !self.cx.needed(name)? => Ok(()),
             DeclKind::Proc { .. } => {
                 let depth = self.depth + 1;
                 self.cx.compile_proc(d, depth)

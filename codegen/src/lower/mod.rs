@@ -135,19 +135,23 @@ pub struct Compiler<'p> {
     pub externals: HashMap<SymbolId, &'static occ_runtime::intrinsic::Intrinsic>,
     /// The network layout, once the `PLACED PAR` is compiled.
     pub network: Option<crate::network::NetworkLayout>,
+    /// The routines the entry PROC reaches: the only ones compiled.
+    pub reach: crate::reach::Reach,
     locations: HashMap<(usize, usize), u32>,
 }
 
 impl<'p> Compiler<'p> {
-    /// Starts compiling `checked` (spans mapped through `map`) with the intrinsics of `set`;
-    /// fails with every EXTERNAL that cannot be bound (see [`crate::bind`]).
+    /// Starts compiling the routines of `checked` that `reach` needs (spans mapped through
+    /// `map`) with the intrinsics of `set`; fails with every EXTERNAL that they call and that
+    /// cannot be bound (see [`crate::bind`]).
     pub fn new(
         checked: &'p CheckedProgram,
         map: &'p SourceMap,
         set: &occ_runtime::intrinsic::IntrinsicSet,
+        reach: crate::reach::Reach,
     ) -> Res<Compiler<'p>> {
         let decl_syms = checked.symbols.iter().map(|(id, s)| (s.span, id)).collect();
-        let bindings = crate::bind::bind_externals(checked, set);
+        let bindings = crate::bind::bind_some(checked, set, |id| reach.needs(checked, id));
         if !bindings.errors.is_empty() {
             return Err(CodegenError::Link(bindings.errors));
         }
@@ -164,6 +168,7 @@ impl<'p> Compiler<'p> {
             proc_name: String::new(),
             locations: HashMap::new(),
             network: None,
+            reach,
         })
     }
 
@@ -201,6 +206,12 @@ impl<'p> Compiler<'p> {
             span,
             what: what.into(),
         }
+    }
+
+    /// Whether the declaration of routine `name` is compiled: something reaches it.
+    pub fn needed(&self, name: &ast::Name) -> Res<bool> {
+        let sym = self.symbol(name)?;
+        Ok(self.reach.needs(self.checked, sym))
     }
 
     /// The symbol a name occurrence denotes.

@@ -1,6 +1,6 @@
 //! Declarations (occam "specifications") and types as written.
 
-use occ_grammar::ast::{self, AbbrevMode, DeclKind, ParamMode};
+use occ_grammar::ast::{self, AbbrevMode, DeclKind, ParamMode, Span};
 
 use super::Checker;
 use crate::checked::{ProcInfo, SymbolId, SymbolKind};
@@ -187,14 +187,14 @@ impl Checker {
             DeclKind::Protocol { name, def } => self.protocol(name, def),
             DeclKind::Proc {
                 name, params, body, ..
-            } => self.proc_decl(name, params, &[], None, Some(body)),
+            } => self.proc_decl(d.span, name, params, &[], None, Some(body)),
             DeclKind::Function {
                 name,
                 results,
                 params,
                 body,
                 ..
-            } => self.proc_decl(name, params, results, Some(body), None),
+            } => self.proc_decl(d.span, name, params, results, Some(body), None),
             DeclKind::Place { name, at } => {
                 self.lookup(name);
                 let t = self.expr(at, Some(&Type::INT));
@@ -409,6 +409,7 @@ impl Checker {
 
     fn proc_decl(
         &mut self,
+        span: Span,
         name: &ast::Name,
         params: &[ast::Param],
         results: &[ast::Ty],
@@ -422,6 +423,7 @@ impl Checker {
         let info = ProcInfo {
             name: name.text.clone(),
             symbol: None,
+            span,
             params: Vec::new(),
             results,
             usage: Vec::new(),

@@ -31,6 +31,7 @@ impl Checker {
         let pid = self.out.procs.push(ProcInfo {
             name: e.name.text.clone(),
             symbol: None,
+            span: e.header,
             params: Vec::new(),
             results,
             usage: Vec::new(),
