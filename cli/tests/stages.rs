@@ -113,3 +113,41 @@ fn forcing_every_stage_on_agrees_and_leaving_one_out_is_said() {
     );
     assert!(compare.join("compare.png").is_file() && compare.join("compare.md").is_file());
 }
+
+/// carm.occ leaves out the shadow rays of the convex room as the reference solver does: it says
+/// so, casts none, and gives the answer it gives with them (`--all-stages`), and the reference
+/// solver's.
+#[test]
+fn carm_leaves_out_shadow_rays_where_the_reference_solver_does() {
+    let carm = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
+    let (lean, lean_err) = convex_room(&scratch("stages-carm-lean"), &carm);
+    let all = [&carm[..], &["--all-stages"]].concat();
+    let (full, _) = convex_room(&scratch("stages-carm-full"), &all);
+    let (reference, _) = convex_room(&scratch("stages-carm-reference"), &[]);
+    assert!(lean_err.contains("left out: shadow rays"), "{lean_err}");
+    assert!(left_out(&lean).iter().any(|s| s.starts_with("shadow rays")));
+    assert_eq!(lean["stages"]["shadow_rays"], false);
+    assert_eq!(full["stages"]["shadow_rays"], true);
+    let rays = |r: &serde_json::Value| -> u64 {
+        (r["nodes"].as_array().expect("nodes").iter())
+            .map(|n| n["rays"].as_u64().expect("rays"))
+            .sum()
+    };
+    assert_eq!(rays(&lean), 0);
+    assert!(rays(&full) > 0);
+    // Every ray of the convex room gets through: the same answer to the last bits of the sums.
+    for (((name, a), (_, b)), (_, r)) in
+        means(&lean).iter().zip(means(&full)).zip(means(&reference))
+    {
+        for c in 0..3 {
+            assert!(
+                (a[c] - b[c]).abs() <= 1e-9 * b[c],
+                "{name}: {a:?} without rays, {b:?} with"
+            );
+            assert!(
+                (a[c] - r[c]).abs() <= 1e-9 * r[c],
+                "{name}: {a:?} against the reference {r:?}"
+            );
+        }
+    }
+}

@@ -459,6 +459,8 @@ fn host_input(
     // Closing each shot's form-factor row where the reference solver does (a closed convex
     // enclosure: every shot's power lands on its surfaces).
     w.int(i32::from(solver.stages.close_rows));
+    // Casting shadow rays, unless no surface can hide another (a convex enclosure).
+    w.int(i32::from(solver.stages.shadow_rays));
     // The cache's REAL32s, or -1: every voxel on every node.
     w.int(
         settings

@@ -10,7 +10,6 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
-use occ_radiosity::analysis::Stages;
 use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::mesh::{Mesh, MeshConfig};
 use occ_radiosity::output::compare;
@@ -288,14 +287,6 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         solver_config(&args, diag, mesh_config.element_size),
     );
     let octree_time = t2.elapsed().as_secs_f64();
-    if let SolverKind::Carm = args.solver {
-        // carm.occ always casts shadow rays; it closes form-factor rows where the reference
-        // solver does.
-        solver.stages = Stages {
-            shadow_rays: true,
-            close_rows: solver.stages.close_rows,
-        };
-    }
     if reports {
         print_stages(&solver);
     }
