@@ -200,22 +200,24 @@ fn carm_on_1_4_13_and_40_nodes_agrees_with_the_reference_solver() {
     }
 }
 
+/// The table lamp (an octree of eight voxels) at the settings both solvers run it with.
+const LAMP: [&str; 10] = [
+    concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj"),
+    "--no-adapt",
+    "--rays",
+    "4",
+    "--element-size",
+    "1",
+    "--until",
+    "unshot=0.05",
+    "--image-size",
+    "16",
+];
+
 /// A scene whose octree has several voxels, so that shadow rays walk from voxel to voxel.
 #[test]
 fn carm_walks_a_many_voxel_octree_as_the_reference_solver() {
-    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
-    let settings = [
-        scene,
-        "--no-adapt",
-        "--rays",
-        "4",
-        "--element-size",
-        "1",
-        "--until",
-        "unshot=0.05",
-        "--image-size",
-        "16",
-    ];
+    let settings = LAMP;
     let reference = radiosity_with(&scratch("carm-lamp-reference"), &settings, &[]);
     let leaves = reference["scene"]["octree"]["leaves"]
         .as_u64()
@@ -556,19 +558,7 @@ fn assert_spread_agrees(
 /// largest voxel is more than an eighth of them all).
 #[test]
 fn carm_spreads_the_table_lamps_voxels_over_caches_and_the_backing_store() {
-    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
-    let settings = [
-        scene,
-        "--no-adapt",
-        "--rays",
-        "4",
-        "--element-size",
-        "1",
-        "--until",
-        "unshot=0.05",
-        "--image-size",
-        "16",
-    ];
+    let settings = LAMP;
     assert_spread_agrees("carm-lamp-spread", &settings, |_| (2112, 1056));
 }
 

@@ -9,17 +9,14 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+mod common;
+use common::{balance_error, means, scratch};
+
 /// A scene of the repository's `scenes/extreme/` folder.
 fn scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../scenes/extreme")
         .join(name)
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
 }
 
 /// The settings both solvers run with: coarse, few rays (and `--until`, per test).
@@ -62,27 +59,6 @@ const CARM: &[&str] = &[
     "unshot=0.05",
 ];
 const REFERENCE: &[&str] = &["--solver", "reference", "--until", "unshot=0.05"];
-
-fn rgb(v: &serde_json::Value) -> [f64; 3] {
-    [0, 1, 2].map(|c| v[c].as_f64().expect("a number"))
-}
-
-/// Per object: name and mean B.
-fn means(report: &serde_json::Value) -> Vec<(String, [f64; 3])> {
-    (report["objects"].as_array().expect("objects").iter())
-        .map(|o| (o["name"].as_str().expect("name").into(), rgb(&o["mean_b"])))
-        .collect()
-}
-
-/// The energy balance of a report's totals, relative to the emitted power (worst channel).
-fn balance_error(report: &serde_json::Value) -> f64 {
-    let t = &report["totals"];
-    let [e, a, x, u] = ["emitted", "absorbed", "escaped", "unshot"].map(|k| rgb(&t[k]));
-    (0..3)
-        .filter(|&c| e[c] > 0.0)
-        .map(|c| (e[c] - a[c] - x[c] - u[c]).abs() / e[c])
-        .fold(0.0, f64::max)
-}
 
 /// carm.occ and the reference solver on `path`: finite, balanced, every object within 1%.
 fn agrees(path: &Path, name: &str) {

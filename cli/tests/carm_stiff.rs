@@ -12,17 +12,14 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+mod common;
+use common::{balance_error, means, rgb, scratch};
+
 /// A scene of the repository's `scenes/` folder.
 fn scene(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../scenes")
         .join(name)
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
 }
 
 /// Runs `occ radiosity SCENE --solver carm --no-adapt` with `extra` flags into `out`.
@@ -59,26 +56,6 @@ fn report(scene: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
     );
     let text = std::fs::read_to_string(out.join("report.json")).expect("report.json written");
     serde_json::from_str(&text).expect("report.json parses")
-}
-
-fn rgb(v: &serde_json::Value) -> [f64; 3] {
-    [0, 1, 2].map(|c| v[c].as_f64().expect("a number"))
-}
-
-/// Per object: name and mean B.
-fn means(report: &serde_json::Value) -> Vec<(String, [f64; 3])> {
-    (report["objects"].as_array().expect("objects").iter())
-        .map(|o| (o["name"].as_str().expect("name").into(), rgb(&o["mean_b"])))
-        .collect()
-}
-
-/// The energy balance of a report's totals, relative to the emitted power (worst channel).
-fn balance_error(report: &serde_json::Value) -> f64 {
-    let t = &report["totals"];
-    let [e, a, x, u] = ["emitted", "absorbed", "escaped", "unshot"].map(|k| rgb(&t[k]));
-    (0..3)
-        .map(|c| (e[c] - a[c] - x[c] - u[c]).abs() / e[c])
-        .fold(0.0, f64::max)
 }
 
 /// Solves the stiff box of reflectance `rho` with carm.occ and checks every object's mean B

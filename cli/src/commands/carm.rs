@@ -19,6 +19,7 @@ use std::sync::{Arc, Mutex};
 use glam::{DVec3, Vec3};
 use occ_codegen::network::{NetworkOptions, NetworkOutcome};
 use occ_radiosity::mesh::Mesh;
+use occ_radiosity::octree::flat::FlatOctree;
 use occ_radiosity::overshoot::Acceleration;
 use occ_radiosity::solver::{ConvergencePoint, Solver, Until};
 use occ_runtime::remote::Transport;
@@ -188,12 +189,16 @@ pub fn solve(
         settings.nodes
     );
     let host_here = transport.as_deref().is_none_or(|t| t.spread().rank == 0);
+    let flat = solver
+        .octree
+        .flat()
+        .map_err(|e| anyhow::anyhow!("carm.occ cannot take the scene's octree: {e}"))?;
     let (input, store) = if host_here {
-        host_input(solver, settings)?
+        host_input(solver, &flat, settings)?
     } else {
         (Vec::new(), None)
     };
-    let capacities = capacities(solver, settings)?;
+    let capacities = capacities(solver, &flat, settings)?;
     let shares = store.as_ref().map(|s| s.shares.clone());
     let reads = store.as_ref().map(|s| s.reads.clone());
     let answers = Pipe::default();
@@ -280,6 +285,7 @@ pub fn solve(
 /// more point's corners), beyond which the controller re-hashes a point to another node.
 fn capacities(
     solver: &Solver,
+    flat: &FlatOctree,
     settings: &CarmSettings,
 ) -> anyhow::Result<Vec<(&'static str, usize)>> {
     let tolerance = settings.load_tolerance;
@@ -288,18 +294,10 @@ fn capacities(
         "--load-tolerance {tolerance}: a node must be able to hold at least its even share (1 or more)"
     );
     let mesh = &solver.mesh;
-    let flat = solver
-        .octree
-        .flat()
-        .map_err(|e| anyhow::anyhow!("carm.occ cannot take the scene's octree: {e}"))?;
     let corners_at = corners_at_points(mesh);
     let most_at_one = corners_at.iter().copied().max().unwrap_or(0);
     let share = |n: usize| (tolerance * n as f64 / settings.nodes as f64).ceil() as usize;
-    let mut per_patch = vec![0usize; mesh.patches.len()];
-    for e in &mesh.elements {
-        per_patch[e.patch as usize] += 1;
-    }
-    let most_in_one = per_patch.iter().copied().max().unwrap_or(0);
+    let most_in_one = most_elements_of_one_patch(mesh);
     let voxels = flat.voxel_count();
     let largest = (0..voxels).map(|v| flat.voxel(v).len()).max().unwrap_or(0);
     let points = mesh.vertices.len();
@@ -327,6 +325,15 @@ fn capacities(
     .into_iter()
     .map(|(name, n)| (name, n.max(1)))
     .collect())
+}
+
+/// The most elements of any one patch.
+fn most_elements_of_one_patch(mesh: &Mesh) -> usize {
+    let mut per_patch = vec![0usize; mesh.patches.len()];
+    for e in &mesh.elements {
+        per_patch[e.patch as usize] += 1;
+    }
+    per_patch.into_iter().max().unwrap_or(0)
 }
 
 /// How many element corners sit at each sample point.
@@ -391,6 +398,7 @@ fn compile(name: &str, text: &str) -> anyhow::Result<occ_codegen::Compiled> {
 /// the reference solver's own, in its flat form, so the nodes' shadow rays meet what its rays do.
 fn host_input(
     solver: &Solver,
+    flat: &FlatOctree,
     settings: &CarmSettings,
 ) -> anyhow::Result<(Vec<u8>, Option<Store>)> {
     let config = solver.config();
@@ -407,14 +415,10 @@ fn host_input(
     let int = |n: usize, what: &str| {
         i32::try_from(n).map_err(|_| anyhow::anyhow!("{what} ({n}) is too many for carm.occ"))
     };
-    let flat = solver
-        .octree
-        .flat()
-        .map_err(|e| anyhow::anyhow!("carm.occ cannot take the scene's octree: {e}"))?;
     let voxels = flat.voxel_count();
     let largest = (0..voxels).map(|v| flat.voxel(v).len()).max().unwrap_or(0);
     let spread = match &settings.memory {
-        Some(memory) => Some(spread(&flat, memory, settings.nodes)?),
+        Some(memory) => Some(spread(flat, memory, settings.nodes)?),
         None => None,
     };
     let mut w = Writer::default();
@@ -428,12 +432,10 @@ fn host_input(
     // The elements go grouped by patch (in mesh order within each), as the controller keeps them.
     let mut by_patch: Vec<usize> = (0..mesh.elements.len()).collect();
     by_patch.sort_by_key(|&e| mesh.elements[e].patch);
-    let mut per_patch = vec![0usize; mesh.patches.len()];
-    for e in &mesh.elements {
-        per_patch[e.patch as usize] += 1;
-    }
-    let most = per_patch.iter().copied().max().unwrap_or(0);
-    w.int(int(most, "elements in one patch")?);
+    w.int(int(
+        most_elements_of_one_patch(mesh),
+        "elements in one patch",
+    )?);
     w.int(config.form_factor.rays as i32);
     w.int64(config.seed as i64);
     w.real32(config.form_factor.offset);
@@ -539,7 +541,7 @@ fn host_input(
         }
     }
     let store = match (&settings.memory, spread) {
-        (Some(memory), Some((_, shares))) => Some(Store::write(&memory.store, &flat, shares)?),
+        (Some(memory), Some((_, shares))) => Some(Store::write(&memory.store, flat, shares)?),
         _ => None,
     };
     Ok((w.0, store))
@@ -551,7 +553,7 @@ fn host_input(
 /// Refuses, naming the setting, a cache smaller than the largest voxel, a node memory smaller
 /// than the cache, and link queues too small for the fetches.
 fn spread(
-    flat: &occ_radiosity::octree::flat::FlatOctree,
+    flat: &FlatOctree,
     memory: &Memory,
     nodes: usize,
 ) -> anyhow::Result<(Vec<i32>, Vec<u64>)> {
@@ -613,11 +615,7 @@ struct Store {
 
 impl Store {
     /// Writes every voxel of `flat` to `path` (creating its folder).
-    fn write(
-        path: &std::path::Path,
-        flat: &occ_radiosity::octree::flat::FlatOctree,
-        shares: Vec<u64>,
-    ) -> anyhow::Result<Store> {
+    fn write(path: &std::path::Path, flat: &FlatOctree, shares: Vec<u64>) -> anyhow::Result<Store> {
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir)
                 .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;

@@ -276,16 +276,15 @@ pub unsafe extern "C" fn receivers_form_factors(
         Some(tri) => {
             let config = FormFactorConfig::default();
             let each = points.chunks_exact(RECEIVER_FLOATS).zip(first.windows(2));
+            let mut s = Vec::new();
             for ((floats, span), o) in each.zip(f.iter_mut()) {
                 let (a, b) = (span[0] as usize, span[1] as usize);
                 *o = if a == b {
                     0.0
                 } else {
                     let (p, n) = receiver(floats);
-                    let s: Vec<Vec3> = samples[3 * a..3 * b]
-                        .chunks_exact(3)
-                        .map(Vec3::from_slice)
-                        .collect();
+                    s.clear();
+                    s.extend(samples[3 * a..3 * b].chunks_exact(3).map(Vec3::from_slice));
                     let w = if weights.is_empty() {
                         &[][..]
                     } else {

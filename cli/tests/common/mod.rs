@@ -1,0 +1,33 @@
+//! Helpers the carm.occ test files share: scratch folders and what they read from report.json.
+
+use std::path::{Path, PathBuf};
+
+/// A fresh scratch folder named `name` under cargo's temporary folder for tests.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// Three numbers of a JSON array (RGB).
+pub fn rgb(v: &serde_json::Value) -> [f64; 3] {
+    [0, 1, 2].map(|c| v[c].as_f64().expect("a number"))
+}
+
+/// Per object of a report: name and mean B.
+pub fn means(report: &serde_json::Value) -> Vec<(String, [f64; 3])> {
+    (report["objects"].as_array().expect("objects").iter())
+        .map(|o| (o["name"].as_str().expect("name").into(), rgb(&o["mean_b"])))
+        .collect()
+}
+
+/// The energy balance of a report's totals, relative to the emitted power (worst channel that
+/// emits).
+pub fn balance_error(report: &serde_json::Value) -> f64 {
+    let t = &report["totals"];
+    let [e, a, x, u] = ["emitted", "absorbed", "escaped", "unshot"].map(|k| rgb(&t[k]));
+    (0..3)
+        .filter(|&c| e[c] > 0.0)
+        .map(|c| (e[c] - a[c] - x[c] - u[c]).abs() / e[c])
+        .fold(0.0, f64::max)
+}
