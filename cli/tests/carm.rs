@@ -7,7 +7,7 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 /// The same settings for both solvers: a coarse mesh and few rays so that a debug build solves
-/// in seconds; no adaptive subdivision (carm.occ does not subdivide yet).
+/// in seconds; no adaptive subdivision (`carm_subdivides_as_the_reference_solver` has it).
 const SETTINGS: &[&str] = &[
     "--no-adapt",
     "--rays",
@@ -200,6 +200,83 @@ fn carm_on_1_4_13_and_40_nodes_agrees_with_the_reference_solver() {
     }
 }
 
+/// Adaptive subdivision's settings: a finer start than `SETTINGS` and more rays, because a
+/// midpoint whose verdict sits on its threshold can go either way with the last bit of a
+/// float (carm.occ sums an element's unshot power over its corners, the reference solver per
+/// element), and on a coarse mesh one point more or less moves a small face's mean by a few
+/// percent, as a different seed does.
+const ADAPTIVE: &[&str] = &[
+    "--rays",
+    "8",
+    "--element-size",
+    "75",
+    "--until",
+    "unshot=0.05",
+    "--image-size",
+    "16",
+];
+
+/// The sample points of each row of a run's convergence record.
+fn vertices_by_row(out: &Path) -> Vec<u64> {
+    let text = std::fs::read_to_string(out.join("convergence.csv")).expect("convergence.csv");
+    text.lines()
+        .skip(1)
+        .map(|row| {
+            row.split(',')
+                .nth(3)
+                .expect("a vertices column")
+                .parse()
+                .expect("a count")
+        })
+        .collect()
+}
+
+#[test]
+fn carm_subdivides_as_the_reference_solver() {
+    let reference = radiosity_with(
+        &scratch("carm-adapt-reference"),
+        ADAPTIVE,
+        &["--solver", "reference"],
+    );
+    let points = |r: &serde_json::Value| r["scene"]["final_vertices"].as_u64().expect("a count");
+    let mut first: Option<serde_json::Value> = None;
+    for nodes in ["4", "40"] {
+        let out = scratch(&format!("carm-adapt-{nodes}"));
+        let carm = radiosity_with(
+            &out,
+            ADAPTIVE,
+            &["--solver", "carm", "--nodes", nodes, "--threads", "1"],
+        );
+        // The mesh grew during the shots, as much as the reference solver's did.
+        let rows = vertices_by_row(&out);
+        assert!(
+            rows.last() > rows.first(),
+            "{nodes} nodes: no sample points added after the first shot: {rows:?}"
+        );
+        let (ours, theirs) = (points(&carm) as f64, points(&reference) as f64);
+        assert!(
+            (ours - theirs).abs() <= 0.01 * theirs,
+            "{nodes} nodes: {ours} sample points against the reference solver's {theirs}"
+        );
+        assert_agree(&carm, &reference, &format!("{nodes} nodes: "));
+        // The node count changes only the order of sums, not a single split.
+        if let Some(first) = &first {
+            assert_eq!(
+                points(first),
+                points(&carm),
+                "{nodes} nodes split differently"
+            );
+            for ((name, b), (_, r)) in means(&carm).iter().zip(&means(first)) {
+                assert!(
+                    apart(b, r) <= 1e-9,
+                    "{nodes} nodes: {name}: {b:?} against {r:?}"
+                );
+            }
+        }
+        first.get_or_insert(carm);
+    }
+}
+
 /// The table lamp (an octree of eight voxels) at the settings both solvers run it with.
 const LAMP: [&str; 10] = [
     concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj"),
@@ -331,7 +408,6 @@ fn carm_overshoots_by_the_ambient_estimate_as_the_reference_solver() {
 fn carm_refuses_what_it_cannot_do_clearly() {
     let out = scratch("carm-refusals");
     for (flags, says) in [
-        (&["--solver", "carm"][..], "--no-adapt"),
         (
             &["--solver", "carm", "--no-adapt", "--until", "time=1"][..],
             "takes --until error=F, unshot=F or shots=N",

@@ -238,6 +238,112 @@ fn edge_key(a: u32, b: u32) -> (u32, u32) {
     if a < b { (a, b) } else { (b, a) }
 }
 
+/// The edge map of elements given by their corners, in order: each edge lists its elements by
+/// ascending index.
+fn edge_map_of(elements: impl ExactSizeIterator<Item = [u32; 3]>) -> EdgeMap {
+    let mut edges = EdgeMap::default();
+    // About three edges for every two elements in a connected mesh.
+    edges.reserve(elements.len() * 3 / 2);
+    for (i, v) in elements.enumerate() {
+        for k in 0..3 {
+            edges
+                .entry(edge_key(v[k], v[(k + 1) % 3]))
+                .or_default()
+                .push(i as u32);
+        }
+    }
+    edges
+}
+
+/// Where a mesh's elements keep their corners: the mesh's own elements, or a flat array of
+/// three vertex indices an element (carm.occ's controller, through `RAD.REFINE.SPLIT`).
+pub trait ElementCorners {
+    /// The corners of element `t`.
+    fn corners(&self, t: u32) -> [u32; 3];
+    /// Gives element `t` the corners `v`.
+    fn set_corners(&mut self, t: u32, v: [u32; 3]);
+    /// Appends a copy of element `of` (its patch, object) with the corners `v`; returns its index.
+    fn push_copy(&mut self, of: u32, v: [u32; 3]) -> u32;
+}
+
+impl ElementCorners for Vec<Element> {
+    fn corners(&self, t: u32) -> [u32; 3] {
+        self[t as usize].v
+    }
+    fn set_corners(&mut self, t: u32, v: [u32; 3]) {
+        self[t as usize].v = v;
+    }
+    fn push_copy(&mut self, of: u32, v: [u32; 3]) -> u32 {
+        self.push(Element {
+            v,
+            ..self[of as usize]
+        });
+        self.len() as u32 - 1
+    }
+}
+
+/// A conforming mesh's connectivity over elements kept elsewhere: splits edges exactly as
+/// [`Mesh::split_edge`] does (it is the same code), for a program that keeps the elements
+/// itself.
+pub struct Connectivity<C: ElementCorners> {
+    edges: EdgeMap,
+    /// The elements.
+    pub elements: C,
+}
+
+impl<C: ElementCorners> Connectivity<C> {
+    /// The connectivity of `count` elements.
+    pub fn new(elements: C, count: usize) -> Self {
+        let edges = edge_map_of((0..count as u32).map(|t| elements.corners(t)));
+        Connectivity { edges, elements }
+    }
+
+    /// Splits edge `(a, b)` at vertex `m` ([`Mesh::split_edge`]'s contract).
+    pub fn split_edge(&mut self, a: u32, b: u32, m: u32) -> Vec<u32> {
+        split_edge_in(&mut self.edges, &mut self.elements, a, b, m)
+    }
+
+    /// Whether `(a, b)` is an edge of some element.
+    pub fn has_edge(&self, a: u32, b: u32) -> bool {
+        self.edges.contains_key(&edge_key(a, b))
+    }
+}
+
+/// Splits edge `(a, b)` at vertex `m` in every element of `elements` that has it: each such
+/// element `(x, y, c)` (rotated so that the edge is `x -> y`) becomes `(x, m, c)` and a new
+/// element `(m, y, c)` is appended. Returns the split elements, in the order their halves were
+/// appended.
+fn split_edge_in<C: ElementCorners>(
+    edges: &mut EdgeMap,
+    elements: &mut C,
+    a: u32,
+    b: u32,
+    m: u32,
+) -> Vec<u32> {
+    let mut around = edges.remove(&edge_key(a, b)).unwrap_or_default();
+    // In index order, so that the halves are numbered alike however the map was built.
+    around.sort_unstable();
+    let mut split = Vec::with_capacity(around.len());
+    for &t in &around {
+        let v = elements.corners(t);
+        // Rotate so that the split edge is v[0] -> v[1].
+        let Some(i) = (0..3).find(|&i| edge_key(v[i], v[(i + 1) % 3]) == edge_key(a, b)) else {
+            continue;
+        };
+        let (x, y, c) = (v[i], v[(i + 1) % 3], v[(i + 2) % 3]);
+        elements.set_corners(t, [x, m, c]);
+        let t2 = elements.push_copy(t, [m, y, c]);
+        if let Some(list) = edges.get_mut(&edge_key(y, c)) {
+            list.iter_mut().filter(|s| **s == t).for_each(|s| *s = t2);
+        }
+        edges.entry(edge_key(x, m)).or_default().push(t);
+        edges.entry(edge_key(m, y)).or_default().push(t2);
+        edges.entry(edge_key(m, c)).or_default().extend([t, t2]);
+        split.push(t);
+    }
+    split
+}
+
 /// Points with normals closer than this (cosine) belong to one surface.
 const SAME_SURFACE: f64 = 0.999;
 
@@ -554,46 +660,14 @@ impl Mesh {
 
     /// Rebuilds the edge map from the elements.
     fn rebuild_edges(&mut self) {
-        self.edges.clear();
-        // About three edges for every two elements in a connected mesh.
-        self.edges.reserve(self.elements.len() * 3 / 2);
-        for (i, e) in self.elements.iter().enumerate() {
-            for k in 0..3 {
-                self.edges
-                    .entry(edge_key(e.v[k], e.v[(k + 1) % 3]))
-                    .or_default()
-                    .push(i as u32);
-            }
-        }
+        self.edges = edge_map_of(self.elements.iter().map(|e| e.v));
     }
 
     /// Splits edge `(a, b)` at vertex `m` in every element that has it, keeping the mesh
     /// conforming. Returns the elements that were split (each keeps its index and shrinks; the
-    /// other halves are appended).
+    /// other halves are appended, in the order of the returned list).
     pub fn split_edge(&mut self, a: u32, b: u32, m: u32) -> Vec<u32> {
-        let around = self.edges.remove(&edge_key(a, b)).unwrap_or_default();
-        for &t in &around {
-            let e = self.elements[t as usize];
-            // Rotate so that the split edge is v[0] -> v[1].
-            let Some(i) = (0..3).find(|&i| edge_key(e.v[i], e.v[(i + 1) % 3]) == edge_key(a, b))
-            else {
-                continue;
-            };
-            let (x, y, c) = (e.v[i], e.v[(i + 1) % 3], e.v[(i + 2) % 3]);
-            self.elements[t as usize].v = [x, m, c];
-            let t2 = self.elements.len() as u32;
-            self.elements.push(Element { v: [m, y, c], ..e });
-            if let Some(list) = self.edges.get_mut(&edge_key(y, c)) {
-                list.iter_mut().filter(|s| **s == t).for_each(|s| *s = t2);
-            }
-            self.edges.entry(edge_key(x, m)).or_default().push(t);
-            self.edges.entry(edge_key(m, y)).or_default().push(t2);
-            self.edges
-                .entry(edge_key(m, c))
-                .or_default()
-                .extend([t, t2]);
-        }
-        around.to_vec()
+        split_edge_in(&mut self.edges, &mut self.elements, a, b, m)
     }
 
     /// Adds a vertex on edge `(a, b)` at `p` (normal and inset taken from the edge's ends).

@@ -26,6 +26,7 @@ use crate::kernels::{SamplePoint, shoot_batch_visibility};
 use crate::mesh::Mesh;
 use crate::octree::{Octree, OctreeConfig};
 use crate::overshoot::{self, Acceleration};
+use crate::refine;
 use crate::scene::Scene;
 
 /// Cells per side of the grid that tabulates a shooting patch's unshot radiosity
@@ -603,14 +604,19 @@ impl<'a> Solver<'a> {
             let mut split = 0;
             for (&(a, b), (m, fm)) in candidates.iter().zip(mids.iter().zip(mid_f)) {
                 let (fa, fb) = (factors[a as usize], factors[b as usize]);
-                let local = self.local_irradiance(a, b) + db * fa.max(fb);
-                if (db * (fm - 0.5 * (fa + fb))).abs() <= adapt.nonlinearity * local {
+                let (ia, ib) = (
+                    self.irradiance[a as usize].element_sum(),
+                    self.irradiance[b as usize].element_sum(),
+                );
+                let local = refine::local_irradiance(ia, ib, db, fa, fb);
+                if !refine::nonlinear(fa, fb, fm, local, db, adapt.nonlinearity) {
                     continue;
                 }
-                self.split_at(a, b, m, fm, &mut factors);
+                let v = self.split_edge_at_midpoint(a, b);
+                debug_assert_eq!(self.mesh.vertices[v as usize].pos, Vec3::from(m.pos));
+                factors.push(fm);
                 split += 1;
             }
-            self.stats.adaptive_splits += split;
             if split == 0 {
                 break;
             }
@@ -618,62 +624,55 @@ impl<'a> Solver<'a> {
         factors
     }
 
-    /// Edges longer than twice the minimum whose two ends receive from this shot amounts that
-    /// differ by more than `difference` times the local irradiance (including this shot),
-    /// steepest first.
+    /// The edges to test by a midpoint this shot ([`refine::candidates`]), steepest first.
     fn refinement_candidates(
         &self,
         factors: &[f32],
         db: f32,
         adapt: &AdaptConfig,
     ) -> Vec<(u32, u32)> {
-        let mut scored: Vec<(f32, (u32, u32))> = self
+        let irradiance = |v: u32| self.irradiance[v as usize].element_sum();
+        let edges = self
             .mesh
             .edge_list()
             .into_iter()
-            .filter_map(|(a, b)| {
-                let (fa, fb) = (factors[a as usize], factors[b as usize]);
-                let local = self.local_irradiance(a, b) + db * fa.max(fb);
-                let len = (self.mesh.vertices[a as usize].pos - self.mesh.vertices[b as usize].pos)
-                    .length();
-                let steep = db * (fa - fb).abs() / local.max(f32::MIN_POSITIVE);
-                (len > 2.0 * adapt.min_edge && steep > adapt.difference).then_some((steep, (a, b)))
-            })
-            .collect();
-        scored.sort_by(|x, y| y.0.total_cmp(&x.0));
-        scored.into_iter().map(|(_, e)| e).collect()
+            .map(|(a, b)| refine::EdgeEnds {
+                ends: (a, b),
+                length: (self.mesh.vertices[a as usize].pos - self.mesh.vertices[b as usize].pos)
+                    .length(),
+                factors: (factors[a as usize], factors[b as usize]),
+                irradiance: (irradiance(a), irradiance(b)),
+            });
+        let test = refine::EdgeTest {
+            difference: adapt.difference,
+            min_edge: adapt.min_edge,
+        };
+        refine::candidates(edges, db, test)
     }
 
-    /// The larger irradiance (channels summed) gathered so far at the ends of an edge.
-    fn local_irradiance(&self, a: u32, b: u32) -> f32 {
-        self.irradiance[a as usize]
-            .element_sum()
-            .max(self.irradiance[b as usize].element_sum())
-    }
-
-    /// Adds the sample point `m` (with this shot's factor `fm`) on edge `(a, b)` and splits it.
-    fn split_at(&mut self, a: u32, b: u32, m: &SamplePoint, fm: f32, factors: &mut Vec<f32>) {
+    /// Adds the sample point in the middle of edge `(a, b)` ([`refine::midpoint`]) and splits
+    /// the edge there in every element that has it, as adaptive subdivision does; returns the
+    /// new point's index. Its irradiance starts as the mean of the ends' (earlier shots are
+    /// interpolated along the edge), and the split elements' halves share their unshot power
+    /// by area. A host replaying the splits a node program made calls this in their order.
+    pub fn split_edge_at_midpoint(&mut self, a: u32, b: u32) -> u32 {
+        let m = self.midpoint(a, b);
         let v = self.mesh.add_edge_vertex(a, b, Vec3::from(m.pos));
         self.mesh.vertices[v as usize].eval = Vec3::from(m.eval);
-        // Earlier shots are interpolated along the edge; this shot is computed exactly.
         let h = 0.5 * (self.irradiance[a as usize] + self.irradiance[b as usize]);
         self.irradiance.push(h);
-        factors.push(fm);
         let before = self.mesh.elements.len();
         let shrunk = self.mesh.split_edge(a, b, v);
         self.fix_split_areas(before, &shrunk);
+        self.stats.adaptive_splits += 1;
+        v
     }
 
     fn midpoint(&self, a: u32, b: u32) -> SamplePoint {
-        let (va, vb) = (
-            self.mesh.vertices[a as usize],
-            self.mesh.vertices[b as usize],
-        );
-        SamplePoint {
-            pos: ((va.pos + vb.pos) * 0.5).to_array(),
-            normal: (va.normal + vb.normal).normalize_or(va.normal).to_array(),
-            eval: ((va.eval + vb.eval) * 0.5).to_array(),
-        }
+        refine::midpoint(
+            &SamplePoint::from(&self.mesh.vertices[a as usize]),
+            &SamplePoint::from(&self.mesh.vertices[b as usize]),
+        )
     }
 
     /// Recomputes element areas after a split appended elements from index `before` and shrank

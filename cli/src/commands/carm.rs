@@ -61,6 +61,7 @@ mod tag {
     pub const REFUSED: i32 = 5;
     pub const READ: i32 = 6;
     pub const REHASHED: i32 = 7;
+    pub const SPLIT: i32 = 8;
 }
 
 /// How to run carm.occ.
@@ -180,10 +181,6 @@ pub fn solve(
     transport: Option<&mut dyn Transport>,
 ) -> anyhow::Result<Option<CarmReport>> {
     anyhow::ensure!(
-        solver.config().adapt.is_none(),
-        "--solver carm does not subdivide yet: give --no-adapt"
-    );
-    anyhow::ensure!(
         (1..=MAX_NODES).contains(&settings.nodes),
         "--nodes {}: carm.occ runs on 1 to {MAX_NODES} nodes",
         settings.nodes
@@ -297,15 +294,23 @@ fn capacities(
     let corners_at = corners_at_points(mesh);
     let most_at_one = corners_at.iter().copied().max().unwrap_or(0);
     let share = |n: usize| (tolerance * n as f64 / settings.nodes as f64).ceil() as usize;
-    let most_in_one = most_elements_of_one_patch(mesh);
     let voxels = flat.voxel_count();
     let largest = (0..voxels).map(|v| flat.voxel(v).len()).max().unwrap_or(0);
-    let points = mesh.vertices.len();
+    // Adaptive subdivision adds up to `growth` points, each splitting an edge of one or two
+    // elements (two new elements), and each split element brings five corners (programs/
+    // README.md, "Adaptive subdivision"), on whichever nodes keep its points.
+    let points = point_budget(solver);
+    let growth = points - mesh.vertices.len();
+    let elements = mesh.elements.len() + 2 * growth;
+    let most_in_one = most_elements_of_one_patch(mesh) + 2 * growth;
     Ok(vec![
         ("MAX.POINTS", points),
         ("NODE.POINTS", share(points).min(points)),
-        ("NODE.CORNERS", share(3 * mesh.elements.len()) + most_at_one),
-        ("MAX.ELEMENTS", mesh.elements.len()),
+        (
+            "NODE.CORNERS",
+            share(3 * mesh.elements.len() + 10 * growth) + most_at_one,
+        ),
+        ("MAX.ELEMENTS", elements),
         ("MAX.PATCH.ELEMENTS", most_in_one),
         ("MAX.PATCHES", mesh.patches.len()),
         ("MAX.TREE", flat.tree.len()),
@@ -320,11 +325,26 @@ fn capacities(
         ),
         ("MAX.VOXEL", largest),
         ("MAX.OBJECTS", solver.scene.objects.len()),
-        ("MAX.REPORT", 3 * mesh.patches.len().max(most_in_one)),
+        // a shot's report (3 a patch), a gather's (3 an element of one patch), a refining
+        // shot's (4 a sample point)
+        (
+            "MAX.REPORT",
+            (3 * mesh.patches.len().max(most_in_one)).max(if growth > 0 { 4 * points } else { 0 }),
+        ),
     ]
     .into_iter()
     .map(|(name, n)| (name, n.max(1)))
     .collect())
+}
+
+/// The most sample points the run may have: the mesh's, or with adaptive subdivision
+/// `--max-vertices` when that is more (the reference solver's budget).
+fn point_budget(solver: &Solver) -> usize {
+    let points = solver.mesh.vertices.len();
+    solver
+        .config()
+        .adapt
+        .map_or(points, |a| a.max_vertices.max(points))
 }
 
 /// The most elements of any one patch.
@@ -470,6 +490,25 @@ fn host_input(
             .as_ref()
             .map_or(-1, |m| (m.cache / 4) as i32),
     );
+    // Adaptive subdivision (the reference solver's settings), or 0 for none.
+    match config.adapt {
+        Some(adapt) => {
+            w.int(1);
+            w.real32(adapt.difference);
+            w.real32(adapt.nonlinearity);
+            w.real32(adapt.min_edge);
+            w.real64(adapt.min_shot_power);
+            w.int(int(adapt.passes as usize, "refinement passes")?);
+            w.int(int(point_budget(solver), "--max-vertices")?);
+        }
+        None => {
+            w.int(0);
+            (0..3).for_each(|_| w.real32(0.0));
+            w.real64(0.0);
+            w.int(0);
+            w.int(int(mesh.vertices.len(), "sample points")?);
+        }
+    }
     let mut object_area = vec![0.0f64; scene.objects.len()];
     for e in &mesh.elements {
         object_area[e.object as usize] += mesh.tri(e).area() as f64;
@@ -692,6 +731,8 @@ enum Message {
     Refused([i32; 11]),
     /// The sample points each node took as a later choice (re-hashed).
     Rehashed(Vec<u64>),
+    /// Adaptive subdivision split edge (`0`, `1`) at its midpoint, new sample point `2`.
+    Split(u32, u32, u32),
     /// The end.
     End,
 }
@@ -742,6 +783,10 @@ impl Message {
                 Message::Result(g, Vec3::new(r.real32()?, r.real32()?, r.real32()?))
             }
             tag::READ => Message::Read(r.int()?, r.int()?),
+            tag::SPLIT => {
+                let [a, b, m] = [(); 3].map(|_| r.int().map(|v| v as u32));
+                Message::Split(a?, b?, m?)
+            }
             tag::COUNTERS => {
                 let mut c = [0u64; COUNTERS];
                 for x in &mut c {
@@ -850,6 +895,14 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
                 })?;
                 *slot = h;
                 results += 1;
+            }
+            Message::Split(a, b, m) => {
+                let points = solver.mesh.vertices.len() as u32;
+                anyhow::ensure!(
+                    a < points && b < points && a != b && m == points,
+                    "carm.occ split edge ({a}, {b}) at new sample point {m} of a mesh of {points}"
+                );
+                solver.split_edge_at_midpoint(a, b);
             }
             Message::Counters(c) => nodes.push(c),
             Message::Rehashed(r) => rehashed = r,

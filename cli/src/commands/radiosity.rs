@@ -623,10 +623,6 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(args.nodes >= 1, "--nodes must be at least 1");
     if let SolverKind::Carm = args.solver {
         anyhow::ensure!(
-            args.no_adapt,
-            "--solver carm does not subdivide yet: give --no-adapt"
-        );
-        anyhow::ensure!(
             !matches!(args.until, Until::Seconds(_)),
             "--solver carm takes --until error=F, unshot=F or shots=N"
         );

@@ -209,6 +209,22 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: batch::corners_receive as *const u8,
     },
     Intrinsic {
+        name: "RAD.REFINE.EDGES",
+        params: &[
+            ValInts, ValReal32s, ValReal32s, ValReal32s, ValReal32s, VarInts, VarReal32s, ResultInt,
+        ],
+        result: None,
+        addr: refine::refine_edges as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.REFINE.SPLIT",
+        params: &[
+            ValInts, VarInts, ValInt, ValReal32s, VarInts, VarReal64s, ResultInt, ResultInt,
+        ],
+        result: None,
+        addr: refine::refine_split as *const u8,
+    },
+    Intrinsic {
         name: "RAD.CORNERS.ROW",
         params: &[ValInts, ValReal64s, ValReal32s, VarReal64s, ResultInt],
         result: None,
@@ -671,6 +687,7 @@ pub unsafe extern "C" fn shadow_rays_batch(
 
 mod batch;
 pub mod estimate;
+mod refine;
 #[cfg(test)]
 mod test;
 pub mod weighted;
