@@ -76,8 +76,9 @@ fn left_out(report: &serde_json::Value) -> Vec<String> {
 #[test]
 fn forcing_every_stage_on_agrees_and_leaving_one_out_is_said() {
     let (lean_dir, full_dir) = (scratch("stages-lean"), scratch("stages-full"));
-    let (lean, lean_err) = convex_room(&lean_dir, &[]);
-    let (full, full_err) = convex_room(&full_dir, &["--all-stages"]);
+    let reference = ["--solver", "reference"];
+    let (lean, lean_err) = convex_room(&lean_dir, &reference);
+    let (full, full_err) = convex_room(&full_dir, &[&reference[..], &["--all-stages"]].concat());
     assert!(
         lean_err.contains("left out: shadow rays") && lean_err.contains("--all-stages"),
         "{lean_err}"
@@ -123,7 +124,10 @@ fn carm_leaves_out_shadow_rays_where_the_reference_solver_does() {
     let (lean, lean_err) = convex_room(&scratch("stages-carm-lean"), &carm);
     let all = [&carm[..], &["--all-stages"]].concat();
     let (full, _) = convex_room(&scratch("stages-carm-full"), &all);
-    let (reference, _) = convex_room(&scratch("stages-carm-reference"), &[]);
+    let (reference, _) = convex_room(
+        &scratch("stages-carm-reference"),
+        &["--solver", "reference"],
+    );
     assert!(lean_err.contains("left out: shadow rays"), "{lean_err}");
     assert!(left_out(&lean).iter().any(|s| s.starts_with("shadow rays")));
     assert_eq!(lean["stages"]["shadow_rays"], false);

@@ -1,5 +1,5 @@
-//! `occ radiosity`: reads the scene (or takes the embedded Cornell box), runs the reference
-//! solver or carm.occ (`--solver carm`, [`super::carm`]) and writes its outputs (report,
+//! `occ radiosity`: reads the scene (or takes the embedded Cornell box), runs carm.occ (the
+//! default, [`super::carm`]) or the reference solver (`--solver reference`) and writes its outputs (report,
 //! convergence, image, mesh; see the README) into `--out`. All the radiosity is in
 //! `occ-radiosity` or carm.occ; this module only parses flags, reads and writes files and shows
 //! progress.
@@ -78,8 +78,8 @@ pub struct Args {
     /// their near field (0: every shot casts them all).
     #[arg(long, default_value_t = occ_radiosity::solver::FULL_RAYS_POWER)]
     pub full_rays_power: f64,
-    /// Solver.
-    #[arg(long, value_enum, default_value = "reference")]
+    /// Solver: carm.occ on `--nodes` simulated transputers, or the Rust reference solver.
+    #[arg(long, value_enum, default_value = "carm")]
     pub solver: SolverKind,
     /// Nodes of the ternary tree carm.occ runs on (`--solver carm`).
     #[arg(long, default_value_t = 13)]
@@ -624,12 +624,12 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
     if let SolverKind::Carm = args.solver {
         anyhow::ensure!(
             !matches!(args.until, Until::Seconds(_)),
-            "--solver carm takes --until error=F, unshot=F or shots=N"
+            "--solver carm (the default) takes --until error=F, unshot=F or shots=N; --solver reference takes the others"
         );
     }
     anyhow::ensure!(
         args.transport == super::transport::Kind::Inproc || matches!(args.solver, SolverKind::Carm),
-        "--transport mpi spreads carm.occ's nodes: give --solver carm"
+        "--transport mpi spreads carm.occ's nodes: not with --solver reference"
     );
     anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
     anyhow::ensure!(
@@ -638,11 +638,11 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
     );
     anyhow::ensure!(
         args.program.is_none() || matches!(args.solver, SolverKind::Carm),
-        "--program names a node program for --solver carm"
+        "--program names a node program for carm.occ's place: not with --solver reference"
     );
     anyhow::ensure!(
         args.node_memory.is_none() || matches!(args.solver, SolverKind::Carm),
-        "--node-memory and --cache spread carm.occ's voxels: give --solver carm"
+        "--node-memory and --cache spread carm.occ's voxels: not with --solver reference"
     );
     for (flag, v) in [
         ("--patch-size", args.patch_size),
