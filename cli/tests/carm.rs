@@ -277,6 +277,28 @@ fn carm_subdivides_as_the_reference_solver() {
     }
 }
 
+/// Subdivision stops at `--max-vertices` as the reference solver's does, on 13 nodes whose
+/// arrays the host sized for that many points.
+#[test]
+fn carm_subdivides_up_to_the_point_budget() {
+    let out = scratch("carm-adapt-budget");
+    let carm = radiosity_with(
+        &out,
+        &[SETTINGS[1..].to_vec(), vec!["--until", "unshot=0.05"]].concat(),
+        &[
+            "--solver",
+            "carm",
+            "--nodes",
+            "13",
+            "--threads",
+            "1",
+            "--max-vertices",
+            "1000",
+        ],
+    );
+    assert_eq!(carm["scene"]["final_vertices"], 1000);
+}
+
 /// The table lamp (an octree of eight voxels) at the settings both solvers run it with.
 const LAMP: [&str; 10] = [
     concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj"),

@@ -42,6 +42,11 @@ pub const BACKING_STORE: &str = "backing-store.bin";
 /// and `QUEUE.FLOATS`): the voxels a node asks for at a time, and a link queue's messages and
 /// REAL32s. (Its voxel pool, `MAX.POOL`, is sized from `--node-memory`.)
 const FETCHES: usize = 2;
+
+/// carm.occ's `MAX.PROBES`: the midpoints one round of adaptive subdivision evaluates; a round
+/// adds at most ten element corners to a node and two elements a midpoint (its `ROUND.CORNERS`,
+/// `ROUND.ELEMENTS`), the room it keeps free.
+const MAX_PROBES: usize = 256;
 const MAX_QUEUE: usize = FETCHES * MAX_NODES;
 const QUEUE_FLOATS: usize = 65_536;
 
@@ -301,14 +306,15 @@ fn capacities(
     // README.md, "Adaptive subdivision"), on whichever nodes keep its points.
     let points = point_budget(solver);
     let growth = points - mesh.vertices.len();
-    let elements = mesh.elements.len() + 2 * growth;
+    let round = |n: usize| if growth > 0 { n * MAX_PROBES } else { 0 };
+    let elements = mesh.elements.len() + 2 * growth + round(2);
     let most_in_one = most_elements_of_one_patch(mesh) + 2 * growth;
     Ok(vec![
         ("MAX.POINTS", points),
         ("NODE.POINTS", share(points).min(points)),
         (
             "NODE.CORNERS",
-            share(3 * mesh.elements.len() + 10 * growth) + most_at_one,
+            share(3 * mesh.elements.len() + 10 * growth) + most_at_one + round(10),
         ),
         ("MAX.ELEMENTS", elements),
         ("MAX.PATCH.ELEMENTS", most_in_one),
