@@ -292,9 +292,20 @@ pub struct Connectivity<C: ElementCorners> {
 }
 
 impl<C: ElementCorners> Connectivity<C> {
-    /// The connectivity of `count` elements.
-    pub fn new(elements: C, count: usize) -> Self {
-        let edges = edge_map_of((0..count as u32).map(|t| elements.corners(t)));
+    /// The connectivity of `count` elements around the edges `wanted` (each `(lower, higher)`),
+    /// the only edges [`Connectivity::split_edge`] may then split: enough for splitting a set of
+    /// edges of the mesh, in any order, without mapping the others.
+    pub fn around(elements: C, count: usize, wanted: impl Iterator<Item = (u32, u32)>) -> Self {
+        let mut edges: EdgeMap = wanted.map(|e| (e, SmallVec::new())).collect();
+        for t in 0..count as u32 {
+            let v = elements.corners(t);
+            for k in 0..3 {
+                if let Some(list) = edges.get_mut(&edge_key(v[k], v[(k + 1) % 3])) {
+                    list.push(t);
+                }
+            }
+        }
+        edges.retain(|_, list| !list.is_empty());
         Connectivity { edges, elements }
     }
 
@@ -722,7 +733,12 @@ impl Mesh {
             .map_or(&[], |v| v.as_slice())
     }
 
-    /// Returns every edge once, as `(a, b)` with `a < b`.
+    /// Every edge once, as `(a, b)` with `a < b`, in no particular order.
+    pub fn edges(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.edges.keys().copied()
+    }
+
+    /// Returns every edge once, as `(a, b)` with `a < b`, ascending.
     pub fn edge_list(&self) -> Vec<(u32, u32)> {
         let mut list: Vec<(u32, u32)> = self.edges.keys().copied().collect();
         list.sort_unstable();

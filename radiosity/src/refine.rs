@@ -39,9 +39,11 @@ pub struct EdgeTest {
     pub min_edge: f32,
 }
 
-/// The edges to test by a midpoint, steepest first (ties in the order given): longer than
-/// twice the minimum and with ends that receive from this shot amounts differing by more than
-/// `difference` times the local irradiance.
+/// The edges to test by a midpoint: longer than twice the minimum and with ends that receive
+/// from this shot amounts differing by more than `difference` times the local irradiance;
+/// steepest first, edges equally steep by their ends (lower, higher) ascending. The order is
+/// that whatever order `edges` come in, and an edge that comes more than once is listed once
+/// (`ends` with the lower vertex first).
 pub fn candidates(
     edges: impl Iterator<Item = EdgeEnds>,
     db: f32,
@@ -55,7 +57,8 @@ pub fn candidates(
             (e.length > 2.0 * test.min_edge && steep > test.difference).then_some((steep, e.ends))
         })
         .collect();
-    scored.sort_by(|x, y| y.0.total_cmp(&x.0));
+    scored.sort_unstable_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
+    scored.dedup_by_key(|x| x.1);
     scored.into_iter().map(|(_, e)| e).collect()
 }
 
@@ -80,15 +83,10 @@ pub fn midpoint(a: &SamplePoint, b: &SamplePoint) -> SamplePoint {
     }
 }
 
-/// The distinct edges of elements given by their corners, ascending by (lower, higher) vertex:
-/// the order [`crate::mesh::Mesh::edge_list`] gives.
-pub fn sorted_edges(elements: impl Iterator<Item = [u32; 3]>) -> Vec<(u32, u32)> {
-    let mut list: Vec<(u32, u32)> = elements
-        .flat_map(|v| (0..3).map(move |k| (v[k].min(v[(k + 1) % 3]), v[k].max(v[(k + 1) % 3]))))
-        .collect();
-    list.sort_unstable();
-    list.dedup();
-    list
+/// The edges of elements given by their corners, (lower, higher) vertex, an edge once for
+/// each element that has it.
+pub fn element_edges(elements: impl Iterator<Item = [u32; 3]>) -> impl Iterator<Item = (u32, u32)> {
+    elements.flat_map(|v| (0..3).map(move |k| (v[k].min(v[(k + 1) % 3]), v[k].max(v[(k + 1) % 3]))))
 }
 
 #[cfg(test)]
@@ -129,8 +127,25 @@ mod tests {
     }
 
     #[test]
-    fn edges_are_listed_once_in_order() {
-        let list = sorted_edges([[2, 1, 0], [1, 2, 3]].into_iter());
-        assert_eq!(list, vec![(0, 1), (0, 2), (1, 2), (1, 3), (2, 3)]);
+    fn equally_steep_edges_come_by_their_ends_and_once() {
+        let test = EdgeTest {
+            difference: 0.3,
+            min_edge: 1.0,
+        };
+        let edges = [
+            edge((2, 3), 5.0, (1.0, 0.0)),
+            edge((0, 1), 5.0, (1.0, 0.0)),
+            edge((2, 3), 5.0, (1.0, 0.0)),
+        ];
+        assert_eq!(
+            candidates(edges.into_iter(), 1.0, test),
+            vec![(0, 1), (2, 3)]
+        );
+    }
+
+    #[test]
+    fn element_edges_have_the_lower_vertex_first() {
+        let list: Vec<_> = element_edges([[2, 1, 0]].into_iter()).collect();
+        assert_eq!(list, vec![(1, 2), (0, 1), (0, 2)]);
     }
 }

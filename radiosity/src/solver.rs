@@ -632,17 +632,13 @@ impl<'a> Solver<'a> {
         adapt: &AdaptConfig,
     ) -> Vec<(u32, u32)> {
         let irradiance = |v: u32| self.irradiance[v as usize].element_sum();
-        let edges = self
-            .mesh
-            .edge_list()
-            .into_iter()
-            .map(|(a, b)| refine::EdgeEnds {
-                ends: (a, b),
-                length: (self.mesh.vertices[a as usize].pos - self.mesh.vertices[b as usize].pos)
-                    .length(),
-                factors: (factors[a as usize], factors[b as usize]),
-                irradiance: (irradiance(a), irradiance(b)),
-            });
+        let edges = self.mesh.edges().map(|(a, b)| refine::EdgeEnds {
+            ends: (a, b),
+            length: (self.mesh.vertices[a as usize].pos - self.mesh.vertices[b as usize].pos)
+                .length(),
+            factors: (factors[a as usize], factors[b as usize]),
+            irradiance: (irradiance(a), irradiance(b)),
+        });
         let test = refine::EdgeTest {
             difference: adapt.difference,
             min_edge: adapt.min_edge,

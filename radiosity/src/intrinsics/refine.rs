@@ -88,14 +88,12 @@ pub unsafe extern "C" fn refine_edges(
             .chunks_exact(3)
             .map(|v| [v[0] as u32, v[1] as u32, v[2] as u32]);
         let pos = |v: u32| glam::Vec3::from_slice(&point[POINT_FLOATS * v as usize..][..3]);
-        let edges = refine::sorted_edges(corners)
-            .into_iter()
-            .map(|(a, b)| EdgeEnds {
-                ends: (a, b),
-                length: (pos(a) - pos(b)).length(),
-                factors: (factor[a as usize], factor[b as usize]),
-                irradiance: (irradiance[a as usize], irradiance[b as usize]),
-            });
+        let edges = refine::element_edges(corners).map(|(a, b)| EdgeEnds {
+            ends: (a, b),
+            length: (pos(a) - pos(b)).length(),
+            factors: (factor[a as usize], factor[b as usize]),
+            irradiance: (irradiance[a as usize], irradiance[b as usize]),
+        });
         let rule = EdgeTest {
             difference: test[1],
             min_edge: test[2],
@@ -227,7 +225,11 @@ fn split_all(
         count,
         overflow: false,
     };
-    let mut mesh = Connectivity::new(flat, count);
+    let wanted = split.chunks_exact(3).map(|s| {
+        let (a, b) = (s[0] as u32, s[1] as u32);
+        (a.min(b), a.max(b))
+    });
+    let mut mesh = Connectivity::around(flat, count, wanted);
     let tri_area = |v: [u32; 3]| {
         let p = |i: usize| glam::Vec3::from_slice(&point[POINT_FLOATS * v[i] as usize..][..3]);
         crate::geom::Tri::new(p(0), p(1), p(2)).area() as f64
