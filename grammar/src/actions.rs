@@ -450,6 +450,121 @@ pub fn ext_query<'a>(
     })
 }
 
+/// The body of a variant of `c ?? CASE`: an [`ProcessKind::Extended`] whose input is SKIP (the
+/// variant's own items are the input), so that `during` runs while the outputter is held and
+/// `after` once it is released.
+pub fn held_body(during: Process, after: Option<Process>) -> Process {
+    let start = during.span.start;
+    let end = after.as_ref().map_or(during.span.end, |a| a.span.end);
+    Process {
+        kind: ProcessKind::Extended {
+            input: Box::new(Process {
+                kind: ProcessKind::Skip,
+                span: Span::new(start, start),
+            }),
+            during: Box::new(during),
+            after: after.map(Box::new),
+        },
+        span: Span::new(start, end),
+    }
+}
+
+/// `c ?? CASE` with indented variants: an extended input whose input is the case input and whose
+/// own processes are SKIP; each variant's body is a [`held_body`].
+pub fn held_case(chan: Expr, variants: Vec<Variant>) -> ProcessKind {
+    let end = variants.last().map_or(chan.span.end, |v| v.span.end);
+    let span = Span::new(chan.span.start, end);
+    ProcessKind::Extended {
+        input: Box::new(Process {
+            kind: ProcessKind::CaseInput { chan, variants },
+            span,
+        }),
+        during: Box::new(Process {
+            kind: ProcessKind::Skip,
+            span: Span::new(end, end),
+        }),
+        after: None,
+    }
+}
+
+/// The ALT alternative `[cond &] c ?? CASE` with indented variants (see [`held_case`]); `q` is
+/// the operator after the channel and where it is.
+pub fn held_case_alternative<'a>(
+    cond: Option<Expr>,
+    chan: Term,
+    q: (UserOp, usize, usize),
+    variants: Vec<Variant>,
+    l: usize,
+    r: usize,
+) -> Result<Alternative, ParseError<usize, Token<'a>, Box<Diagnostic>>> {
+    ext_query(q.0, q.1, q.2)?;
+    let chan = chan.expr;
+    let span = Span::new(chan.span.start, r);
+    Ok(Alternative {
+        decls: Vec::new(),
+        kind: AltKind::Guarded {
+            cond,
+            guard: Box::new(Process {
+                kind: held_case(chan, variants),
+                span,
+            }),
+            body: Box::new(Process {
+                kind: ProcessKind::Skip,
+                span: Span::new(r, r),
+            }),
+        },
+        span: Span::new(l, r),
+    })
+}
+
+/// The ALT alternative `[cond &] c ?? CASE tag; x` (one line) with its process run while the
+/// outputter is held and, if written, its process run after the release; `variant` is the tag,
+/// the items and where they end.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one per part of the alternative as written"
+)]
+pub fn held_tag_alternative<'a>(
+    cond: Option<Expr>,
+    chan: Term,
+    q: (UserOp, usize, usize),
+    variant: (Name, Vec<IoItem>, usize),
+    during: Process,
+    after: Option<Process>,
+    l: usize,
+    r: usize,
+) -> Result<Alternative, ParseError<usize, Token<'a>, Box<Diagnostic>>> {
+    ext_query(q.0, q.1, q.2)?;
+    let chan = chan.expr;
+    let start = chan.span.start;
+    let (tag, items, end) = variant;
+    let input = Process {
+        kind: one_variant(chan, tag, items, start, end),
+        span: Span::new(start, end),
+    };
+    let body = after.unwrap_or(Process {
+        kind: ProcessKind::Skip,
+        span: Span::new(r, r),
+    });
+    let guard = Process {
+        span: Span::new(start, during.span.end),
+        kind: ProcessKind::Extended {
+            input: Box::new(input),
+            during: Box::new(during),
+            after: None,
+        },
+    };
+    Ok(Alternative {
+        decls: Vec::new(),
+        kind: AltKind::Guarded {
+            cond,
+            guard: Box::new(guard),
+            body: Box::new(body),
+        },
+        span: Span::new(l, r),
+    })
+}
+
 /// Builds the ALT alternative `[cond &] c ?? x` with its process run while the outputter is
 /// held and, if written, its process run after the release. The grammar reads `c ?? x` as the
 /// expression it also spells (a guard's condition is an expression too); `data` is the array of

@@ -756,6 +756,32 @@ pub struct Process {
     pub span: Span,
 }
 
+impl Process {
+    /// The body of a variant of `c ?? CASE` (an [`ProcessKind::Extended`] with a SKIP input):
+    /// the process run while the outputter is held and the one run after its release.
+    pub fn held_parts(&self) -> Option<(&Process, Option<&Process>)> {
+        match &self.kind {
+            ProcessKind::Extended {
+                input,
+                during,
+                after,
+            } if matches!(input.kind, ProcessKind::Skip) => Some((during, after.as_deref())),
+            _ => None,
+        }
+    }
+
+    /// Whether this, the input of an [`ProcessKind::Extended`], is `c ?? CASE` with indented
+    /// variants, each of whose bodies has [`Process::held_parts`].
+    pub fn is_held_case(&self) -> bool {
+        match &self.kind {
+            ProcessKind::CaseInput { variants, .. } => {
+                !variants.is_empty() && variants.iter().all(|v| v.body.held_parts().is_some())
+            }
+            _ => false,
+        }
+    }
+}
+
 /// The shapes of processes.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ProcessKind {

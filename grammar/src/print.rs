@@ -345,6 +345,7 @@ impl Printer {
             ProcessKind::Input { chan, items } => {
                 self.line(&format!("{} ? {}", expr(chan), items_s(items)))
             }
+            ProcessKind::Extended { input, .. } if input.is_held_case() => self.held_case(input),
             ProcessKind::Extended {
                 input,
                 during,
@@ -415,8 +416,32 @@ impl Printer {
             for item in &v.items {
                 let _ = write!(head, "; {}", item_s(item));
             }
-            self.body(&head, &v.body);
+            match v.body.held_parts() {
+                Some((during, after)) => {
+                    self.line(&head);
+                    self.nested(|p| {
+                        p.process(during);
+                        if let Some(after) = after {
+                            p.process(after);
+                        }
+                    });
+                }
+                None => self.body(&head, &v.body),
+            }
         }
+    }
+
+    /// `c ?? CASE` with indented variants (its input; see [`Process::is_held_case`]), written
+    /// after `prefix` (an ALT guard's condition).
+    fn held_case_with(&mut self, prefix: &str, input: &Process) {
+        if let ProcessKind::CaseInput { chan, variants } = &input.kind {
+            self.line(&format!("{prefix}{} ?? CASE", expr(chan)));
+            self.nested(|p| p.variants(variants));
+        }
+    }
+
+    fn held_case(&mut self, input: &Process) {
+        self.held_case_with("", input);
     }
 
     fn if_(&mut self, repl: Option<&Replicator>, choices: &[Choice]) {
@@ -456,6 +481,11 @@ impl Printer {
                 .unwrap_or_default()
         };
         match kind {
+            AltKind::Guarded { cond, guard, .. } if matches!(&guard.kind, ProcessKind::Extended { input, .. } if input.is_held_case()) => {
+                if let ProcessKind::Extended { input, .. } = &guard.kind {
+                    self.held_case_with(&cond_s(cond), input);
+                }
+            }
             AltKind::Guarded { cond, guard, body } => {
                 if let ProcessKind::Extended { input, during, .. } = &guard.kind {
                     self.line(&format!("{}{}", cond_s(cond), extended_s(input)));

@@ -8,6 +8,7 @@
 use crate::abi::{Status, Word, Wptr, tag, wait};
 use crate::error::ErrorKind;
 use crate::host::HostStream;
+use crate::keyboard::{Keyboard, Took};
 use crate::link::LinkEnd;
 use crate::node::Node;
 
@@ -97,10 +98,13 @@ impl Node {
         unsafe {
             let buf = std::slice::from_raw_parts_mut(data, len.max(0) as usize);
             match &*engine {
-                Engine::HostIn => {
-                    let r = self.host.read(buf);
-                    self.host_result(ws, r)
-                }
+                Engine::HostIn => match self.threaded_keyboard() {
+                    Some(kb) => self.keyboard_in(&kb, ws, chan, data, buf.len()),
+                    None => {
+                        let r = self.host.read(buf);
+                        self.host_result(ws, r)
+                    }
+                },
                 Engine::LinkIn(end) => self.link_in(end, ws, chan as Word, data, len),
                 Engine::Unconnected => self.wait_forever(ws, chan as Word),
                 _ => self.protocol_error(ws),
@@ -150,7 +154,16 @@ impl Node {
         let engine = unsafe { &self.endpoint(w).engine } as *const Engine;
         // SAFETY: the endpoint outlives the call.
         match unsafe { &*engine } {
-            Engine::HostIn => true,
+            Engine::HostIn => match self.threaded_keyboard() {
+                Some(kb) => {
+                    let ready = kb.enable(self.desc(ws) | tag::ALT, &self.mailbox);
+                    if !ready {
+                        self.link_waiters += 1;
+                    }
+                    ready
+                }
+                None => true,
+            },
             Engine::LinkIn(end) => self.link_enable(end, ws),
             _ => false,
         }
@@ -165,9 +178,70 @@ impl Node {
         let engine = unsafe { &self.endpoint(w).engine } as *const Engine;
         // SAFETY: the endpoint outlives the call.
         match unsafe { &*engine } {
-            Engine::HostIn => true,
+            Engine::HostIn => match self.threaded_keyboard() {
+                Some(kb) => {
+                    let me = self.desc(ws) | tag::ALT;
+                    let (withdrawn, ready) = kb.disable(me);
+                    if withdrawn {
+                        self.link_waiters -= 1;
+                    } else {
+                        // As for a link: a wake-up already posted is in the mailbox by now.
+                        self.deliver_mail_except(me);
+                    }
+                    ready
+                }
+                None => true,
+            },
             Engine::LinkIn(end) => self.link_disable(end, ws),
             _ => false,
+        }
+    }
+
+    /// The keyboard thread, for a node outside a network whose host reads the input on one.
+    fn threaded_keyboard(&mut self) -> Option<Keyboard> {
+        if self.net.is_some() {
+            return None;
+        }
+        self.host.keyboard()
+    }
+
+    /// An input on the threaded keyboard: complete at once if the bytes are there, else the
+    /// process blocks until the keyboard thread posts it.
+    ///
+    /// # Safety
+    /// As for `rt_in`.
+    unsafe fn keyboard_in(
+        &mut self,
+        kb: &Keyboard,
+        ws: Wptr,
+        chan: *mut Word,
+        data: *mut u8,
+        len: usize,
+    ) -> Status {
+        let flushed = self.host.flush_screen();
+        if flushed.is_err() {
+            return self.host_result(ws, flushed);
+        }
+        // SAFETY: `data` is the blocked frame's buffer, valid until it is posted or withdrawn
+        // (see `withdraw_keyboard`).
+        match unsafe { kb.input(self.desc(ws), data, len, &self.mailbox) } {
+            Took::Done => self.host_result(ws, Ok(())),
+            Took::Waiting => {
+                self.stats.communications += 1;
+                // SAFETY: `ws` is the running frame.
+                unsafe { self.note_blocked(ws, chan as Word) };
+                self.link_waiters += 1;
+                Status::BLOCKED
+            }
+        }
+    }
+
+    /// Withdraws what this node's frames have registered with the keyboard thread (the node
+    /// stops: their workspaces are about to go).
+    pub(crate) fn withdraw_keyboard(&mut self) {
+        if let Some(kb) = self.host.started_keyboard() {
+            let n = kb.withdraw(&self.mailbox);
+            self.link_waiters -= n;
         }
     }
 

@@ -7,11 +7,16 @@
 //! keyboard process). At end of input the keyboard delivers byte 255 ([`END_OF_INPUT`]), and
 //! again on every later read. Output is flushed when the node stops, in every case.
 //!
+//! When the input is a terminal, it is read on a thread of its own instead ([`crate::keyboard`]),
+//! so that a process waiting for a key blocks only itself.
+//!
 //! When the screen is a terminal ([`HostIo::stdio`] asks), it is also flushed at each newline, as
 //! KRoC's screen is, so a program that prints a line now and then is seen as it runs; output to a
 //! file or pipe stays fully buffered, which keeps bulk output fast.
 
 use std::io::{BufWriter, IsTerminal, Read, Write};
+
+use crate::keyboard::Keyboard;
 
 /// Which host stream an output endpoint writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -38,6 +43,10 @@ pub struct HostIo {
     line_flush: bool,
     /// Whether [`FLUSH`] bytes are written as they are (a host protocol of binary data).
     binary: bool,
+    /// Read the input on a thread of its own (see [`crate::keyboard`]).
+    keyboard_thread: bool,
+    /// That thread, once the first input has started it.
+    keyboard: Option<Keyboard>,
 }
 
 impl std::fmt::Debug for HostIo {
@@ -59,7 +68,40 @@ impl HostIo {
             error: BufWriter::new(error),
             line_flush: false,
             binary: false,
+            keyboard_thread: false,
+            keyboard: None,
         }
+    }
+
+    /// Reads the input on a thread of its own (`true`), so that a process waiting for a key
+    /// blocks only itself, or on the node's thread when a process inputs (`false`, which keeps
+    /// runs with piped input exactly repeatable). Used only by a node outside a network.
+    pub fn keyboard_thread(mut self, on: bool) -> HostIo {
+        self.keyboard_thread = on;
+        self
+    }
+
+    /// The keyboard thread, started now if this is the first input; `None` when the input is
+    /// read on the node's thread.
+    pub(crate) fn keyboard(&mut self) -> Option<Keyboard> {
+        if !self.keyboard_thread {
+            return None;
+        }
+        let input = &mut self.input;
+        let kb = self.keyboard.get_or_insert_with(|| {
+            Keyboard::spawn(std::mem::replace(input, Box::new(std::io::empty())))
+        });
+        Some(kb.clone())
+    }
+
+    /// The keyboard thread if it has been started.
+    pub(crate) fn started_keyboard(&self) -> Option<&Keyboard> {
+        self.keyboard.as_ref()
+    }
+
+    /// Flushes the screen (before a keyboard input, so that a prompt shows).
+    pub(crate) fn flush_screen(&mut self) -> std::io::Result<()> {
+        self.screen.flush()
     }
 
     /// The same streams for a program that speaks a binary protocol with its host: every byte
@@ -85,6 +127,7 @@ impl HostIo {
             Box::new(std::io::stderr()),
         )
         .flush_lines(std::io::stdout().is_terminal())
+        .keyboard_thread(std::io::stdin().is_terminal())
     }
 
     /// Writes `bytes` to `stream`; a [`FLUSH`] byte is not written but flushes the stream (as

@@ -88,6 +88,7 @@ pub mod error;
 mod frame;
 pub mod host;
 pub mod intrinsic;
+mod keyboard;
 pub mod link;
 mod mailbox;
 #[cfg(feature = "mpi")]

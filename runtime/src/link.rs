@@ -409,6 +409,12 @@ impl Node {
         ready
     }
 
+    /// Delivers the mail posted so far, dropping `skip` (a withdrawn ALT wake-up).
+    pub(crate) fn deliver_mail_except(&mut self, skip: Word) {
+        let mail = self.mailbox.take_all();
+        self.deliver(mail, Some(skip));
+    }
+
     /// Requeues every descriptor posted by other nodes.
     pub(crate) fn drain_mailbox(&mut self) {
         if self.mailbox.has_mail() {

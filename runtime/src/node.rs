@@ -235,6 +235,7 @@ impl Node {
             .clock_slices()
             .then(|| crate::ticker::register(&self.yield_flag));
         let result = self.run_loop();
+        self.withdraw_keyboard();
         if let Err(RunError::Halted(h)) = &result
             && h.kind != Some(crate::ErrorKind::Stopped)
         {
@@ -293,6 +294,7 @@ impl Drop for Node {
     /// A node dropped without running still counts as stopped in its network, so that its
     /// peers can detect a deadlock instead of waiting for it.
     fn drop(&mut self) {
+        self.withdraw_keyboard();
         self.leave_network();
     }
 }

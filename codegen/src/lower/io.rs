@@ -5,7 +5,7 @@
 use cranelift_codegen::ir::{InstBuilder, Value, condcodes::IntCC, types};
 use cranelift_frontend::Switch;
 use occ_compiler::types::{ChanProtocol, ProtocolItem, ProtocolKind, Type};
-use occ_grammar::ast::{Expr, ExprKind, IoItem, Process, Span, Variant};
+use occ_grammar::ast::{Expr, ExprKind, IoItem, Process, ProcessKind, Span, Variant};
 use occ_runtime::ErrorKind;
 use occ_runtime::abi::{
     Entry, NODE_COMMUNICATIONS_OFFSET, NODE_CUR_PRI_OFFSET, NODE_QUEUES_OFFSET, NOT_PROCESS,
@@ -344,6 +344,9 @@ impl Tr<'_, '_> {
         after: Option<&Process>,
         span: Span,
     ) -> Res<()> {
+        if let ProcessKind::Skip = input.kind {
+            return self.held_variant(during, after, span);
+        }
         let off = self.frame.alloc_word();
         let held = self.local_addr(off);
         let empty = self.iconst(NOT_PROCESS);
@@ -359,6 +362,22 @@ impl Tr<'_, '_> {
             Some(after) => self.process(after),
             None => Ok(()),
         }
+    }
+
+    /// The body of a variant of `c ?? CASE` (the tag and the variant's items have been input
+    /// with the outputter held in `self.held`): `during`, the release, then `after`.
+    fn held_variant(&mut self, during: &Process, after: Option<&Process>, span: Span) -> Res<()> {
+        let Some(off) = self.held.take() else {
+            return Err(self.cx.internal(span, "a `??` variant outside `c ?? CASE`"));
+        };
+        let ran = self.process(during).and_then(|()| {
+            let held = self.local_addr(off);
+            self.blocking(Entry::Xend, &[self.node, self.ws, held], span)?;
+            after.map_or(Ok(()), |a| self.process(a))
+        });
+        // The next variant's items are still input with the outputter held.
+        self.held = Some(off);
+        ran
     }
 
     /// `chan ? CASE` with variants.

@@ -604,8 +604,12 @@ impl Checker {
         for (k, item) in typed.chain(untyped_items) {
             let t = self.table_item(item, elem.as_ref());
             match &elem {
+                // The first item fixes the sizes the context leaves open: the strings of
+                // `VAL [][]BYTE s IS ["ab", "c"]:` must all have the same length.
                 Some(e) => {
-                    self.expect_type(e, &t.ty, item.span);
+                    if self.expect_type(e, &t.ty, item.span) {
+                        elem = Some(with_sizes_of(e, &t.ty));
+                    }
                 }
                 None => elem = Some(t.ty.clone()),
             }
@@ -672,6 +676,14 @@ impl Checker {
             }
         }
         Typed::constant(ty, values.map(Value::Record))
+    }
+}
+
+/// `want` with each array size it leaves open taken from `got` (a type compatible with it).
+fn with_sizes_of(want: &Type, got: &Type) -> Type {
+    match (want, got) {
+        (Type::Array(n, a), Type::Array(m, b)) => Type::array(n.or(*m), with_sizes_of(a, b)),
+        _ => want.clone(),
     }
 }
 
