@@ -370,7 +370,8 @@ pub unsafe extern "C" fn corners_receive(
     let written = if valid {
         for c in 0..n {
             let f = factor[point[c] as usize];
-            if f == 0.0 {
+            // A corner of weight 0 only keeps power for its element (adaptive subdivision).
+            if f == 0.0 || weight[c] == 0.0 {
                 continue;
             }
             let w = f64::from(f) * weight[c];
