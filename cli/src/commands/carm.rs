@@ -31,6 +31,27 @@ use crate::frontend::{self, Options};
 /// The node program, embedded so that `occ radiosity` works from any folder.
 pub const PROGRAM: &str = include_str!("../../../programs/carm.occ");
 
+/// The files carm.occ includes from `programs/` (the parts it shares with carm-named.occ),
+/// embedded with it. A `--program FILE` finds its includes beside FILE instead.
+const PROGRAM_INCLUDES: &[(&str, &str)] = &[
+    (
+        "carm-common.inc",
+        include_str!("../../../programs/carm-common.inc"),
+    ),
+    (
+        "carm-worker-state.inc",
+        include_str!("../../../programs/carm-worker-state.inc"),
+    ),
+    (
+        "carm-worker-shots.inc",
+        include_str!("../../../programs/carm-worker-shots.inc"),
+    ),
+    (
+        "carm-node.inc",
+        include_str!("../../../programs/carm-node.inc"),
+    ),
+];
+
 /// Most nodes carm.occ takes (its `MAX.NODES`; each node's arrays take about 9 MB).
 const MAX_NODES: usize = 1024;
 
@@ -200,7 +221,7 @@ pub fn solve(
     let reads = store.as_ref().map(|s| s.reads.clone());
     let answers = Pipe::default();
     let compiled = match &settings.program {
-        Some((name, text)) => compile(name, &sized(text, &capacities).0)?,
+        Some((name, text)) => compile(name, &sized(text, &capacities).0, false)?,
         None => {
             let (text, found) = sized(PROGRAM, &capacities);
             anyhow::ensure!(
@@ -208,7 +229,7 @@ pub fn solve(
                 "carm.occ declares {found} of its {} capacities",
                 capacities.len()
             );
-            compile("carm.occ", &text)?
+            compile("carm.occ", &text, true)?
         }
     };
     let shape: Shape = format!("tree3:{}", settings.nodes)
@@ -392,25 +413,57 @@ fn sized(program: &str, capacities: &[(&str, usize)]) -> (String, usize) {
     (out, found)
 }
 
-/// Compiles the node program `text` (named `name` in its diagnostics).
-fn compile(name: &str, text: &str) -> anyhow::Result<occ_codegen::Compiled> {
-    let (front, checked) = frontend::load_text(name, text, &Options::default());
-    let Some(front) = front else {
-        let diags: Vec<String> = checked
+/// Compiles the node program `text` (named `name` in its diagnostics); `embedded`: carm.occ,
+/// whose includes are embedded too, else a file whose includes are found beside it.
+fn compile(name: &str, text: &str, embedded: bool) -> anyhow::Result<occ_codegen::Compiled> {
+    let set = frontend::intrinsics();
+    let (parsed, checked) = if embedded {
+        let front = occ_codegen::front_end(name, text, &mut Embedded, &set);
+        let map = &front.parsed.map;
+        let diags: Vec<frontend::Diag> = front
             .diagnostics
             .iter()
-            .map(|d| format!("{}:{}: {}", d.file.display(), d.line, d.message))
+            .map(|d| frontend::Diag::new(d, map))
             .collect();
-        anyhow::bail!("{name} does not compile:\n{}", diags.join("\n"));
+        match front.checked {
+            Some(checked) => (front.parsed, checked),
+            None => bail_diags(name, &diags)?,
+        }
+    } else {
+        let (front, checked) = frontend::load_text(name, text, &Options::default());
+        match front {
+            Some(front) => (front.parsed, front.checked),
+            None => bail_diags(name, &checked.diagnostics)?,
+        }
     };
-    let set = frontend::intrinsics();
-    occ_codegen::compile_with(
-        &front.parsed.program,
-        &front.checked,
-        &front.parsed.map,
-        &set,
-    )
-    .map_err(|e| anyhow::anyhow!("{name}: {e}"))
+    occ_codegen::compile_with(&parsed.program, &checked, &parsed.map, &set)
+        .map_err(|e| anyhow::anyhow!("{name}: {e}"))
+}
+
+/// The error of a node program that does not compile.
+fn bail_diags<T>(name: &str, diags: &[frontend::Diag]) -> anyhow::Result<T> {
+    let lines: Vec<String> = diags
+        .iter()
+        .map(|d| format!("{}:{}: {}", d.file.display(), d.line, d.message))
+        .collect();
+    anyhow::bail!("{name} does not compile:\n{}", lines.join("\n"))
+}
+
+/// Finds carm.occ's includes among the embedded files, and the standard library's built in.
+struct Embedded;
+
+impl occ_grammar::preprocess::Loader for Embedded {
+    fn load(&mut self, name: &str, _from: &str) -> Option<(String, String)> {
+        match PROGRAM_INCLUDES.iter().find(|(n, _)| *n == name) {
+            Some((n, text)) => Some((format!("programs/{n}"), text.to_string())),
+            None => crate::stdlib::get(name).map(|text| {
+                (
+                    format!("{}/{name}", crate::stdlib::PREFIX),
+                    text.to_string(),
+                )
+            }),
+        }
+    }
 }
 
 /// The host protocol's input: header, the octree's frame and tree, its voxels, patches, sample
