@@ -2,11 +2,12 @@
 //! embeds its triangles) and carm-named.occ (the naming scheme of the paper's section 3: a
 //! voxel holds its triangles' names, each triangle is fetched on its own), both on 4 nodes
 //! with the geometry spread so that no node holds more than an eighth of it; and carm.occ
-//! with every voxel on every node for scale. Prints, per run, the messages and bytes over the
+//! with every voxel on every node for scale (a node holds 1 / D of the geometry with
+//! D = 8 by default, its caches seven eighths of that). Prints, per run, the messages and bytes over the
 //! links between nodes, the fetches, the backing-store reads and the time.
 //!
 //! ```text
-//! cargo build --release -p occ && cargo run --release -p occ --example carm_protocols [-- K]
+//! cargo build --release -p occ && cargo run --release -p occ --example carm_protocols [-- K [D]]
 //! ```
 //!
 //! The scene is the room of K x K boxes of the tests (default 6), written to a temporary
@@ -42,6 +43,14 @@ fn main() -> Result<(), String> {
             .map_err(|_| format!("K {k}: a number of boxes a side"))?,
         None => 6,
     };
+    let d: u64 = match std::env::args().nth(2) {
+        Some(d) => d
+            .parse()
+            .ok()
+            .filter(|&d| d > 0)
+            .ok_or(format!("D {d}: a node holds 1 / D of the geometry"))?,
+        None => 8,
+    };
     let occ = occ_binary()?;
     let dir = std::env::temp_dir().join(format!("carm-protocols-{}", std::process::id()));
     let scene = boxes::boxes_scene(&dir, k);
@@ -50,9 +59,9 @@ fn main() -> Result<(), String> {
     let all = replicated["nodes"][0]["voxel_bytes"]
         .as_u64()
         .ok_or("no voxel bytes in the report")?;
-    // An eighth of the geometry a node; the naming scheme halves its cache into a voxel cache
-    // and a triangle cache, each of which must hold the largest voxel.
-    let (node, cache) = (all / 8, all / 8 * 7 / 8);
+    // 1 / D of the geometry a node; the naming scheme halves its cache into a voxel cache and
+    // a triangle cache, each of which must hold the largest voxel.
+    let (node, cache) = (all / d, all / d * 7 / 8);
     let spread = [
         "--node-memory".to_string(),
         node.to_string(),
