@@ -19,7 +19,7 @@ use std::sync::{Arc, Mutex};
 use glam::{DVec3, Vec3};
 use occ_codegen::network::{NetworkOptions, NetworkOutcome};
 use occ_radiosity::mesh::Mesh;
-use occ_radiosity::octree::flat::FlatOctree;
+use occ_radiosity::octree::flat::{FlatOctree, MAX_NAMED_TRIANGLES, NAMED_TRIANGLE_FLOATS};
 use occ_radiosity::overshoot::Acceleration;
 use occ_radiosity::solver::{ConvergencePoint, Solver, Until};
 use occ_runtime::remote::Transport;
@@ -30,6 +30,27 @@ use crate::frontend::{self, Options};
 
 /// The node program, embedded so that `occ radiosity` works from any folder.
 pub const PROGRAM: &str = include_str!("../../../programs/carm.occ");
+
+/// The files carm.occ includes from `programs/` (the parts it shares with carm-named.occ),
+/// embedded with it. A `--program FILE` finds its includes beside FILE instead.
+const PROGRAM_INCLUDES: &[(&str, &str)] = &[
+    (
+        "carm-common.inc",
+        include_str!("../../../programs/carm-common.inc"),
+    ),
+    (
+        "carm-worker-state.inc",
+        include_str!("../../../programs/carm-worker-state.inc"),
+    ),
+    (
+        "carm-worker-shots.inc",
+        include_str!("../../../programs/carm-worker-shots.inc"),
+    ),
+    (
+        "carm-node.inc",
+        include_str!("../../../programs/carm-node.inc"),
+    ),
+];
 
 /// Most nodes carm.occ takes (its `MAX.NODES`; each node's arrays take about 9 MB).
 const MAX_NODES: usize = 1024;
@@ -53,6 +74,9 @@ const QUEUE_FLOATS: usize = 65_536;
 /// The INTs of a node's counters (carm.occ's `COUNTERS`).
 const COUNTERS: usize = 12;
 
+/// Most INTs of a program's own counters after those (`MAX.COUNTERS` less `COUNTERS`).
+const MAX_MORE_COUNTERS: usize = 12;
+
 /// Loop back-edges per timeslice when `--threads 1` makes runs repeat exactly (as `occ run`).
 const COUNTED_SLICE: u32 = 1024;
 
@@ -67,6 +91,7 @@ mod tag {
     pub const READ: i32 = 6;
     pub const REHASHED: i32 = 7;
     pub const SPLIT: i32 = 8;
+    pub const MORE_COUNTERS: i32 = 9;
 }
 
 /// How to run carm.occ.
@@ -148,6 +173,26 @@ pub struct NodeCounters {
     pub busy: f64,
     /// Peak workspace, bytes.
     pub peak_bytes: u64,
+    /// The naming scheme's caches (carm-named.occ), absent for carm.occ.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub named: Option<NamedCounters>,
+}
+
+/// A node's figures of the naming scheme (programs/README.md, "The naming scheme"): its
+/// voxel cache (assembled voxels) and its triangle cache.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct NamedCounters {
+    /// Assembled voxels its walks tested (counted once a walk pass).
+    pub voxel_hits: u64,
+    /// Voxels it assembled (each a miss of the voxel cache).
+    pub voxel_misses: u64,
+    /// Name blocks it fetched from other nodes or the backing store (the others came from its
+    /// share).
+    pub names_fetched: u64,
+    /// Triangles the assembled voxels named that it held (share or triangle cache).
+    pub triangle_hits: u64,
+    /// Triangles it fetched, one request each (triangle cache misses).
+    pub triangle_misses: u64,
 }
 
 /// One link direction's traffic.
@@ -195,17 +240,26 @@ pub fn solve(
         .octree
         .flat()
         .map_err(|e| anyhow::anyhow!("carm.occ cannot take the scene's octree: {e}"))?;
+    let named = settings
+        .program
+        .as_ref()
+        .is_some_and(|(_, text)| declares(text, "MAX.TRIANGLES"));
+    let items = if named {
+        Items::named(solver, &flat)?
+    } else {
+        Items::voxels(&flat)
+    };
     let (input, store) = if host_here {
-        host_input(solver, &flat, settings)?
+        host_input(solver, &flat, &items, settings)?
     } else {
         (Vec::new(), None)
     };
-    let capacities = capacities(solver, &flat, settings)?;
+    let capacities = capacities(solver, &flat, &items, settings)?;
     let shares = store.as_ref().map(|s| s.shares.clone());
     let reads = store.as_ref().map(|s| s.reads.clone());
     let answers = Pipe::default();
     let compiled = match &settings.program {
-        Some((name, text)) => compile(name, &sized(text, &capacities).0)?,
+        Some((name, text)) => compile(name, &sized(text, &capacities).0, false)?,
         None => {
             let (text, found) = sized(PROGRAM, &capacities);
             anyhow::ensure!(
@@ -213,7 +267,7 @@ pub fn solve(
                 "carm.occ declares {found} of its {} capacities",
                 capacities.len()
             );
-            compile("carm.occ", &text)?
+            compile("carm.occ", &text, true)?
         }
     };
     let shape: Shape = format!("tree3:{}", settings.nodes)
@@ -288,6 +342,7 @@ pub fn solve(
 fn capacities(
     solver: &Solver,
     flat: &FlatOctree,
+    items: &Items,
     settings: &CarmSettings,
 ) -> anyhow::Result<Vec<(&'static str, usize)>> {
     let tolerance = settings.load_tolerance;
@@ -299,8 +354,7 @@ fn capacities(
     let corners_at = corners_at_points(mesh);
     let most_at_one = corners_at.iter().copied().max().unwrap_or(0);
     let share = |n: usize| (tolerance * n as f64 / settings.nodes as f64).ceil() as usize;
-    let voxels = flat.voxel_count();
-    let largest = (0..voxels).map(|v| flat.voxel(v).len()).max().unwrap_or(0);
+    let floats = |bytes: u64| bytes.div_ceil(4) as usize;
     // Adaptive subdivision adds up to `growth` points, each splitting an edge of one or two
     // elements (two new elements), and each split element brings five corners (programs/
     // README.md, "Adaptive subdivision"), on whichever nodes keep its points.
@@ -309,7 +363,7 @@ fn capacities(
     let round = |n: usize| if growth > 0 { n * MAX_PROBES } else { 0 };
     let elements = mesh.elements.len() + 2 * growth + round(2);
     let most_in_one = most_elements_of_one_patch(mesh) + 2 * growth;
-    Ok(vec![
+    let mut capacities = vec![
         ("MAX.POINTS", points),
         ("NODE.POINTS", share(points).min(points)),
         (
@@ -320,16 +374,20 @@ fn capacities(
         ("MAX.PATCH.ELEMENTS", most_in_one),
         ("MAX.PATCHES", mesh.patches.len()),
         ("MAX.TREE", flat.tree.len()),
-        ("MAX.VOXELS", voxels),
-        // a node's voxels: all of them, or its share and cache within --node-memory
+        ("MAX.VOXELS", items.count()),
+        // a node's voxels: all of them, or its share and cache within --node-memory (in the
+        // naming scheme its items: all of them, or its share)
         (
             "MAX.POOL",
-            settings.memory.as_ref().map_or(flat.pool().len(), |m| {
-                let floats = |bytes: u64| bytes.div_ceil(4) as usize;
-                floats(m.node).min(flat.pool().len() + floats(m.cache))
-            }),
+            settings
+                .memory
+                .as_ref()
+                .map_or(items.floats(), |m| match items.named {
+                    None => floats(m.node).min(items.floats() + floats(m.cache)),
+                    Some(_) => floats(m.node - m.cache).min(items.floats()),
+                }),
         ),
-        ("MAX.VOXEL", largest),
+        ("MAX.VOXEL", items.largest()),
         ("MAX.OBJECTS", solver.scene.objects.len()),
         // a shot's report (3 a patch), a gather's (3 an element of one patch), a refining
         // shot's (4 a sample point)
@@ -337,10 +395,28 @@ fn capacities(
             "MAX.REPORT",
             (3 * mesh.patches.len().max(most_in_one)).max(if growth > 0 { 4 * points } else { 0 }),
         ),
-    ]
-    .into_iter()
-    .map(|(name, n)| (name, n.max(1)))
-    .collect())
+    ];
+    if let Some(named) = &items.named {
+        // the naming scheme's: its triangles, the largest voxel assembled, and a node's voxel
+        // cache and triangle cache (every voxel assembled, or halves of --cache)
+        let (walk, triangles) = settings
+            .memory
+            .as_ref()
+            .map_or((flat.pool().len(), 1), |m| {
+                let half = floats(m.cache) / 2;
+                (half, (floats(m.cache) - half) / NAMED_TRIANGLE_FLOATS)
+            });
+        capacities.extend([
+            ("MAX.TRIANGLES", named.triangles),
+            ("MAX.BLOCK", named.largest_block),
+            ("MAX.WALK", walk),
+            ("MAX.TRI.CACHE", triangles),
+        ]);
+    }
+    Ok(capacities
+        .into_iter()
+        .map(|(name, n)| (name, n.max(1)))
+        .collect())
 }
 
 /// The most sample points the run may have: the mesh's, or with adaptive subdivision
@@ -398,25 +474,57 @@ fn sized(program: &str, capacities: &[(&str, usize)]) -> (String, usize) {
     (out, found)
 }
 
-/// Compiles the node program `text` (named `name` in its diagnostics).
-fn compile(name: &str, text: &str) -> anyhow::Result<occ_codegen::Compiled> {
-    let (front, checked) = frontend::load_text(name, text, &Options::default());
-    let Some(front) = front else {
-        let diags: Vec<String> = checked
+/// Compiles the node program `text` (named `name` in its diagnostics); `embedded`: carm.occ,
+/// whose includes are embedded too, else a file whose includes are found beside it.
+fn compile(name: &str, text: &str, embedded: bool) -> anyhow::Result<occ_codegen::Compiled> {
+    let set = frontend::intrinsics();
+    let (parsed, checked) = if embedded {
+        let front = occ_codegen::front_end(name, text, &mut Embedded, &set);
+        let map = &front.parsed.map;
+        let diags: Vec<frontend::Diag> = front
             .diagnostics
             .iter()
-            .map(|d| format!("{}:{}: {}", d.file.display(), d.line, d.message))
+            .map(|d| frontend::Diag::new(d, map))
             .collect();
-        anyhow::bail!("{name} does not compile:\n{}", diags.join("\n"));
+        match front.checked {
+            Some(checked) => (front.parsed, checked),
+            None => bail_diags(name, &diags)?,
+        }
+    } else {
+        let (front, checked) = frontend::load_text(name, text, &Options::default());
+        match front {
+            Some(front) => (front.parsed, front.checked),
+            None => bail_diags(name, &checked.diagnostics)?,
+        }
     };
-    let set = frontend::intrinsics();
-    occ_codegen::compile_with(
-        &front.parsed.program,
-        &front.checked,
-        &front.parsed.map,
-        &set,
-    )
-    .map_err(|e| anyhow::anyhow!("{name}: {e}"))
+    occ_codegen::compile_with(&parsed.program, &checked, &parsed.map, &set)
+        .map_err(|e| anyhow::anyhow!("{name}: {e}"))
+}
+
+/// The error of a node program that does not compile.
+fn bail_diags<T>(name: &str, diags: &[frontend::Diag]) -> anyhow::Result<T> {
+    let lines: Vec<String> = diags
+        .iter()
+        .map(|d| format!("{}:{}: {}", d.file.display(), d.line, d.message))
+        .collect();
+    anyhow::bail!("{name} does not compile:\n{}", lines.join("\n"))
+}
+
+/// Finds carm.occ's includes among the embedded files, and the standard library's built in.
+struct Embedded;
+
+impl occ_grammar::preprocess::Loader for Embedded {
+    fn load(&mut self, name: &str, _from: &str) -> Option<(String, String)> {
+        match PROGRAM_INCLUDES.iter().find(|(n, _)| *n == name) {
+            Some((n, text)) => Some((format!("programs/{n}"), text.to_string())),
+            None => crate::stdlib::get(name).map(|text| {
+                (
+                    format!("{}/{name}", crate::stdlib::PREFIX),
+                    text.to_string(),
+                )
+            }),
+        }
+    }
 }
 
 /// The host protocol's input: header, the octree's frame and tree, its voxels, patches, sample
@@ -425,6 +533,7 @@ fn compile(name: &str, text: &str) -> anyhow::Result<occ_codegen::Compiled> {
 fn host_input(
     solver: &Solver,
     flat: &FlatOctree,
+    items: &Items,
     settings: &CarmSettings,
 ) -> anyhow::Result<(Vec<u8>, Option<Store>)> {
     let config = solver.config();
@@ -441,16 +550,16 @@ fn host_input(
     let int = |n: usize, what: &str| {
         i32::try_from(n).map_err(|_| anyhow::anyhow!("{what} ({n}) is too many for carm.occ"))
     };
-    let voxels = flat.voxel_count();
-    let largest = (0..voxels).map(|v| flat.voxel(v).len()).max().unwrap_or(0);
+    let voxels = items.count();
+    let largest = items.largest();
     let spread = match &settings.memory {
-        Some(memory) => Some(spread(flat, memory, settings.nodes)?),
+        Some(memory) => Some(spread(items, memory, settings.nodes)?),
         None => None,
     };
     let mut w = Writer::default();
     w.int(int(flat.tree.len(), "the octree's tree INTs")?);
     w.int(int(voxels, "voxels")?);
-    w.int(int(flat.pool().len(), "the voxels' REAL32s")?);
+    w.int(int(items.floats(), "the voxels' REAL32s")?);
     w.int(int(largest, "the largest voxel's REAL32s")?);
     w.int(int(mesh.patches.len(), "patches")?);
     w.int(int(mesh.vertices.len(), "sample points")?);
@@ -538,14 +647,14 @@ fn host_input(
     if let Some((home, _)) = &spread {
         for (v, &h) in home.iter().enumerate() {
             w.int(h);
-            w.int(flat.voxel(v).len() as i32);
+            w.int(items.item(v).len() as i32);
         }
     }
     for v in 0..voxels {
         if spread.as_ref().is_some_and(|(home, _)| home[v] < 0) {
             continue;
         }
-        let block = flat.voxel(v);
+        let block = items.item(v);
         w.int(block.len() as i32);
         for &x in block {
             w.real32(x);
@@ -586,10 +695,102 @@ fn host_input(
         }
     }
     let store = match (&settings.memory, spread) {
-        (Some(memory), Some((_, shares))) => Some(Store::write(&memory.store, flat, shares)?),
+        (Some(memory), Some((_, shares))) => Some(Store::write(&memory.store, items, shares)?),
         _ => None,
     };
     Ok((w.0, store))
+}
+
+/// The geometry the host sends in the host protocol's places for voxels: carm.occ's voxel
+/// blocks, or the naming scheme's items (programs/README.md, "The naming scheme"): every
+/// voxel's name block, then every triangle.
+struct Items {
+    /// Every item's REAL32s, item 0 first.
+    pool: Vec<f32>,
+    /// Item `i` is `pool[offsets[i] .. offsets[i + 1]]`.
+    offsets: Vec<usize>,
+    /// The naming scheme's sizes; `None` for carm.occ's voxels.
+    named: Option<NamedSizes>,
+}
+
+/// What the naming scheme's capacities need to know of its items.
+struct NamedSizes {
+    /// Triangles (the items after the voxels' name blocks).
+    triangles: usize,
+    /// The REAL32s of the largest voxel assembled.
+    largest_block: usize,
+}
+
+impl Items {
+    /// carm.occ's: the voxels' blocks.
+    fn voxels(flat: &FlatOctree) -> Items {
+        let blocks = (0..flat.voxel_count()).map(|v| flat.voxel(v).to_vec());
+        Items::of(blocks, None)
+    }
+
+    /// The naming scheme's: each voxel's name block, then each triangle.
+    fn named(solver: &Solver, flat: &FlatOctree) -> anyhow::Result<Items> {
+        let named = solver.octree.named(flat).ok_or_else(|| {
+            anyhow::anyhow!(
+                "the naming scheme names at most {MAX_NAMED_TRIANGLES} triangles; the scene has more"
+            )
+        })?;
+        let sizes = NamedSizes {
+            triangles: named.triangles.len(),
+            largest_block: (0..flat.voxel_count())
+                .map(|v| flat.voxel(v).len())
+                .max()
+                .unwrap_or(0),
+        };
+        let triangles = named.triangles.iter().map(|t| t.to_vec());
+        Ok(Items::of(
+            named.voxels.into_iter().chain(triangles),
+            Some(sizes),
+        ))
+    }
+
+    fn of(blocks: impl Iterator<Item = Vec<f32>>, named: Option<NamedSizes>) -> Items {
+        let (mut pool, mut offsets) = (Vec::new(), vec![0]);
+        for b in blocks {
+            pool.extend(b);
+            offsets.push(pool.len());
+        }
+        Items {
+            pool,
+            offsets,
+            named,
+        }
+    }
+
+    /// How many items.
+    fn count(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// Item `i`'s REAL32s.
+    fn item(&self, i: usize) -> &[f32] {
+        &self.pool[self.offsets[i]..self.offsets[i + 1]]
+    }
+
+    /// All items' REAL32s.
+    fn floats(&self) -> usize {
+        self.pool.len()
+    }
+
+    /// The largest item's REAL32s.
+    fn largest(&self) -> usize {
+        (0..self.count())
+            .map(|i| self.item(i).len())
+            .max()
+            .unwrap_or(0)
+    }
+}
+
+/// Whether `program` declares `name` as a capacity (a `VAL INT NAME IS n:` line).
+fn declares(program: &str, name: &str) -> bool {
+    program
+        .lines()
+        .any(|l| l.starts_with(&format!("VAL INT {name} IS ")))
 }
 
 /// Deals the voxels out in order, round the nodes, each node taking a voxel while its share
@@ -597,13 +798,18 @@ fn host_input(
 /// backing store only. Returns each voxel's home (a node, or -1) and each node's share in bytes.
 /// Refuses, naming the setting, a cache smaller than the largest voxel, a node memory smaller
 /// than the cache, and link queues too small for the fetches.
-fn spread(
-    flat: &FlatOctree,
-    memory: &Memory,
-    nodes: usize,
-) -> anyhow::Result<(Vec<i32>, Vec<u64>)> {
-    let voxels = flat.voxel_count();
-    let largest = (0..voxels).map(|v| flat.voxel_bytes(v)).max().unwrap_or(0) as u64;
+fn spread(items: &Items, memory: &Memory, nodes: usize) -> anyhow::Result<(Vec<i32>, Vec<u64>)> {
+    let voxels = items.count();
+    let largest = 4 * items.largest() as u64;
+    if let Some(named) = &items.named {
+        let block = 4 * named.largest_block as u64;
+        anyhow::ensure!(
+            memory.cache / 2 >= block.max(4),
+            "--cache {}: the naming scheme halves it into a voxel cache and a triangle cache, and \
+             each must hold the scene's largest voxel assembled ({block} bytes)",
+            memory.cache
+        );
+    }
     anyhow::ensure!(
         memory.cache >= largest.max(4),
         "--cache {}: smaller than the scene's largest voxel ({largest} bytes); a walk needs one \
@@ -629,7 +835,7 @@ fn spread(
     let mut next = 0;
     let home = (0..voxels)
         .map(|v| {
-            let bytes = flat.voxel_bytes(v) as u64;
+            let bytes = 4 * items.item(v).len() as u64;
             let taker = (0..nodes)
                 .map(|k| (next + k) % nodes)
                 .find(|&n| shares[n] + bytes <= room);
@@ -659,17 +865,17 @@ struct Store {
 }
 
 impl Store {
-    /// Writes every voxel of `flat` to `path` (creating its folder).
-    fn write(path: &std::path::Path, flat: &FlatOctree, shares: Vec<u64>) -> anyhow::Result<Store> {
+    /// Writes every item (voxel) to `path` (creating its folder).
+    fn write(path: &std::path::Path, items: &Items, shares: Vec<u64>) -> anyhow::Result<Store> {
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir)
                 .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
         }
         let fail = |e: std::io::Error| anyhow::anyhow!("backing store {}: {e}", path.display());
-        let mut bytes = Vec::with_capacity(4 * flat.pool().len());
-        let mut at = Vec::with_capacity(flat.voxel_count());
-        for v in 0..flat.voxel_count() {
-            let block = flat.voxel(v);
+        let mut bytes = Vec::with_capacity(4 * items.floats());
+        let mut at = Vec::with_capacity(items.count());
+        for v in 0..items.count() {
+            let block = items.item(v);
             at.push((bytes.len() as u64, block.len()));
             for x in block {
                 bytes.extend_from_slice(&x.to_le_bytes());
@@ -727,6 +933,8 @@ enum Message {
     /// their bytes, the most bytes of voxels held, walks, walks that fetched, voxels fetched,
     /// fetches served.
     Counters([u64; COUNTERS]),
+    /// The program's own counters of the node whose [`Message::Counters`] came last.
+    MoreCounters(Vec<u64>),
     /// A read of voxel `1` from the backing store for node `0`.
     Read(i32, i32),
     /// Every patch's unshot power left.
@@ -800,6 +1008,13 @@ impl Message {
                 }
                 Message::Counters(c)
             }
+            tag::MORE_COUNTERS => {
+                let count = usize::try_from(r.int()?).map_err(|_| Short)?;
+                let more = (0..count.min(MAX_MORE_COUNTERS))
+                    .map(|_| r.int().map(|x| x as u64))
+                    .collect::<Result<_, _>>()?;
+                Message::MoreCounters(more)
+            }
             tag::PATCHES => {
                 let count = usize::try_from(r.int()?).map_err(|_| Short)?;
                 Message::Patches((0..count / 3).map(|_| rgb64(r)).collect::<Result<_, _>>()?)
@@ -827,6 +1042,8 @@ struct Booked {
     nodes: Vec<[u64; COUNTERS]>,
     /// The sample points each node took as a later choice.
     rehashed: Vec<u64>,
+    /// Each node's counters of the program's own ([`Message::MoreCounters`]), by node.
+    more: std::collections::BTreeMap<u64, Vec<u64>>,
 }
 
 /// Books what the root wrote into `solver`; returns what it reported of the nodes.
@@ -843,6 +1060,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
     let mut by_object = vec![DVec3::ZERO; areas.len()];
     let mut nodes = Vec::new();
     let mut rehashed = Vec::new();
+    let mut more = std::collections::BTreeMap::new();
     let mut results = 0;
     let mut at = 0;
     loop {
@@ -911,6 +1129,12 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
                 solver.split_edge_at_midpoint(a, b);
             }
             Message::Counters(c) => nodes.push(c),
+            Message::MoreCounters(c) => {
+                let node = nodes.last().map(|n| n[0]).ok_or_else(|| {
+                    anyhow::anyhow!("carm.occ reported a node's own counters before its counters")
+                })?;
+                more.insert(node, c);
+            }
             Message::Rehashed(r) => rehashed = r,
             Message::Patches(theirs) => {
                 anyhow::ensure!(
@@ -945,7 +1169,11 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
         last.errors = errors;
     }
     nodes.sort_by_key(|c| c[0]);
-    Ok(Booked { nodes, rehashed })
+    Ok(Booked {
+        nodes,
+        rehashed,
+        more,
+    })
 }
 
 /// The report's per-node and per-link figures; `memory` is the node memory, each node's share
@@ -991,6 +1219,16 @@ fn report(
                 0.0
             },
             peak_bytes: n.stats.peak_workspace_bytes,
+            named: booked.more.get(&c[0]).map(|m| {
+                let at = |i: usize| m.get(i).copied().unwrap_or(0);
+                NamedCounters {
+                    voxel_hits: at(0),
+                    voxel_misses: at(1),
+                    names_fetched: at(2),
+                    triangle_hits: at(3),
+                    triangle_misses: at(4),
+                }
+            }),
         })
         .collect();
     let links = outcome

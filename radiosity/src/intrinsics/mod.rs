@@ -155,6 +155,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: walk::rays_walk as *const u8,
     },
     Intrinsic {
+        name: "RAD.VOXEL.ASSEMBLE",
+        params: &[ValReal32s, ValReal32s, VarReal32s, ResultInt],
+        result: None,
+        addr: assemble::voxel_assemble as *const u8,
+    },
+    Intrinsic {
         name: "RAD.RAYS.WALK.STAMPED",
         params: &[
             ValInts, ValReal32s, ValInts, ValReal32s, ValReal32s, VarBools, VarInts, VarInts,
@@ -685,6 +691,7 @@ pub unsafe extern "C" fn shadow_rays_batch(
     unsafe { *count = written };
 }
 
+mod assemble;
 mod batch;
 pub mod estimate;
 mod refine;

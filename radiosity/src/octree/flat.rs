@@ -43,6 +43,7 @@ use glam::{UVec3, Vec3, Vec3A};
 
 use super::{INTERIOR, NO_ROPE, Octree, Path, ROPES, Skeleton, Walker};
 use crate::intrinsics::RAY_FLOATS;
+use crate::packet::NO_TRIANGLE;
 use crate::packet::{BoxGroup, LANES, RayQuery, TriPacket};
 
 /// Ints per record of the `tree` array.
@@ -517,3 +518,116 @@ impl Skeleton for FlatView<'_> {
 
 #[cfg(test)]
 mod test;
+
+/// Floats of a triangle in the naming scheme: corner 0 and the two edges from it, as a
+/// packet's lane holds them.
+pub const NAMED_TRIANGLE_FLOATS: usize = 9;
+
+/// Most triangles the naming scheme names (a name is a REAL32 holding the index exactly).
+pub const MAX_NAMED_TRIANGLES: usize = 1 << 24;
+
+/// The octree's geometry in the naming scheme of the CARM paper's section 3 (programs/
+/// README.md, "The naming scheme"): each voxel holds the names of its triangles instead of
+/// the triangles, and each triangle is a record of its own.
+///
+/// A voxel's **name block** (`[]REAL32`): the packet count `p` (a REAL32 holding it exactly),
+/// then the voxel's `g = ceil (p / 4)` box groups as in its flat block, then `4 p` names, one a
+/// packet lane in lane order: the index of the lane's triangle (exact in a REAL32), or -1 for an
+/// unused lane. A **triangle** is [`NAMED_TRIANGLE_FLOATS`] REAL32s: `v0`, `e1`, `e2` (x, y, z
+/// each). [`assemble`] makes the flat block back from a name block and its triangles.
+#[derive(Clone, Debug)]
+pub struct NamedGeometry {
+    /// Each voxel's name block, voxel order as [`FlatOctree`]'s.
+    pub voxels: Vec<Vec<f32>>,
+    /// Each triangle, by name.
+    pub triangles: Vec<[f32; NAMED_TRIANGLE_FLOATS]>,
+}
+
+impl Octree {
+    /// The naming scheme's form of the voxels of `flat` (this octree's flat form): `None` when
+    /// the octree names more than [`MAX_NAMED_TRIANGLES`] triangles.
+    pub fn named(&self, flat: &FlatOctree) -> Option<NamedGeometry> {
+        let mut triangles: Vec<[f32; NAMED_TRIANGLE_FLOATS]> = Vec::new();
+        let mut voxels = Vec::with_capacity(flat.voxel_count());
+        for &leaf in &flat.leaves {
+            let node = self.nodes[leaf];
+            let (first, count) = (node.first as usize, node.count as usize);
+            let mut block = vec![count as f32];
+            for g in &self.boxes[first / LANES..(first + count).div_ceil(LANES)] {
+                block.extend(g.sides.iter().flatten().flat_map(|v| v.to_array()));
+            }
+            for (p, ids) in self.packets[first..first + count]
+                .iter()
+                .zip(&self.ids[first..first + count])
+            {
+                for (lane, &id) in ids.iter().enumerate() {
+                    if id == NO_TRIANGLE {
+                        block.push(-1.0);
+                        continue;
+                    }
+                    let id = id as usize;
+                    if id >= MAX_NAMED_TRIANGLES {
+                        return None;
+                    }
+                    if triangles.len() <= id {
+                        triangles.resize(id + 1, [0.0; NAMED_TRIANGLE_FLOATS]);
+                    }
+                    let (v0, e1, e2) = p.lane(lane);
+                    for (k, v) in [v0, e1, e2].iter().enumerate() {
+                        triangles[id][3 * k..3 * k + 3].copy_from_slice(&v.to_array());
+                    }
+                    block.push(id as f32);
+                }
+            }
+            voxels.push(block);
+        }
+        Some(NamedGeometry { voxels, triangles })
+    }
+}
+
+/// The packets of a name block of `floats` REAL32s (`None` when no packet count fits).
+pub fn named_packets(floats: usize) -> Option<usize> {
+    let named = |p: usize| 1 + p.div_ceil(LANES) * BOX_GROUP_FLOATS + LANES * p;
+    (0..=floats)
+        .find(|&p| named(p) >= floats)
+        .filter(|&p| named(p) == floats)
+}
+
+/// A voxel's flat block made from its name block `named` and `tris`, the triangles it names
+/// in name order ([`NAMED_TRIANGLE_FLOATS`] a name; those of unused lanes are not read), into
+/// `out`: the number of floats written, [`voxel_floats`] of its packets, or `None` (nothing
+/// written) when `named` is not a name block whose packet count its first float gives, `tris`
+/// is not one triangle a name or `out` is too short.
+pub fn assemble(named: &[f32], tris: &[f32], out: &mut [f32]) -> Option<usize> {
+    let packets = named_packets(named.len())?;
+    if named.first() != Some(&(packets as f32)) {
+        return None;
+    }
+    let boxes = packets.div_ceil(LANES) * BOX_GROUP_FLOATS;
+    let floats = voxel_floats(packets);
+    let names = &named[1 + boxes..];
+    if tris.len() != NAMED_TRIANGLE_FLOATS * names.len() || out.len() < floats {
+        return None;
+    }
+    out[..boxes].copy_from_slice(&named[1..1 + boxes]);
+    for (k, packet) in out[boxes..floats]
+        .chunks_exact_mut(PACKET_FLOATS)
+        .enumerate()
+    {
+        for lane in 0..LANES {
+            let n = LANES * k + lane;
+            let tri = &tris[NAMED_TRIANGLE_FLOATS * n..NAMED_TRIANGLE_FLOATS * (n + 1)];
+            // corner 0, edge 1, edge 2 (which), each x, y, z (axis), by lane
+            for which in 0..3 {
+                for axis in 0..3 {
+                    packet[12 * which + LANES * axis + lane] = if names[n] < 0.0 {
+                        0.0
+                    } else {
+                        tri[3 * which + axis]
+                    };
+                }
+            }
+        }
+    }
+    Some(floats)
+}
