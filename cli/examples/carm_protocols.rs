@@ -19,22 +19,8 @@ use std::process::Command;
 #[path = "../tests/common/boxes.rs"]
 mod boxes;
 
-/// The settings every run shares (those of the tests' spread boxes scene).
-const SETTINGS: [&str; 13] = [
-    "--no-adapt",
-    "--rays",
-    "4",
-    "--element-size",
-    "1",
-    "--until",
-    "unshot=0.2",
-    "--image-size",
-    "16",
-    "--nodes",
-    "4",
-    "--threads",
-    "1",
-];
+/// The nodes every run takes (the settings are the tests' spread boxes scene's).
+const NODES: [&str; 4] = ["--nodes", "4", "--threads", "1"];
 
 fn main() -> Result<(), String> {
     let k: usize = match std::env::args().nth(1) {
@@ -123,7 +109,8 @@ fn run(occ: &Path, scene: &Path, out: &Path, extra: &[&str]) -> Result<serde_jso
         .arg(scene)
         .arg("--out")
         .arg(out)
-        .args(SETTINGS)
+        .args(boxes::BOXES_SETTINGS)
+        .args(NODES)
         .args(extra)
         .output()
         .map_err(|e| format!("{}: {e}", occ.display()))?;

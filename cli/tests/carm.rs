@@ -8,7 +8,7 @@ use std::sync::OnceLock;
 
 #[path = "common/boxes.rs"]
 mod boxes;
-use boxes::boxes_scene;
+use boxes::{BOXES_SETTINGS, boxes_scene};
 
 /// The same settings for both solvers: a coarse mesh and few rays so that a debug build solves
 /// in seconds; no adaptive subdivision (`carm_subdivides_as_the_reference_solver` has it).
@@ -568,18 +568,7 @@ fn carm_spreads_the_table_lamps_voxels_over_caches_and_the_backing_store() {
 fn carm_spreads_a_many_voxel_scene_with_an_eighth_of_it_a_node() {
     let scene = boxes_scene(&scratch("carm-boxes-scene"), 6);
     let scene = scene.to_str().expect("a UTF-8 path");
-    let settings = [
-        scene,
-        "--no-adapt",
-        "--rays",
-        "4",
-        "--element-size",
-        "1",
-        "--until",
-        "unshot=0.2",
-        "--image-size",
-        "16",
-    ];
+    let settings = [&[scene][..], &BOXES_SETTINGS].concat();
     let spread = assert_spread_agrees("carm-boxes-spread", &settings, |all| (all / 8, all / 16));
     assert!(
         spread["scene"]["octree"]["leaves"].as_u64() > Some(16),

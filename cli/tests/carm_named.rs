@@ -13,7 +13,7 @@ use common::{balance_error, means, scratch};
 
 #[path = "common/boxes.rs"]
 mod boxes;
-use boxes::boxes_scene;
+use boxes::{BOXES_SETTINGS, boxes_scene};
 
 /// The naming scheme's node program.
 const NAMED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../programs/carm-named.occ");
@@ -167,18 +167,7 @@ fn named_spreads_the_table_lamp() {
 fn named_spreads_a_many_voxel_scene_with_an_eighth_of_it_a_node() {
     let scene = boxes_scene(&scratch("named-boxes-scene"), 6);
     let scene = scene.to_str().expect("a UTF-8 path");
-    let settings = [
-        scene,
-        "--no-adapt",
-        "--rays",
-        "4",
-        "--element-size",
-        "1",
-        "--until",
-        "unshot=0.2",
-        "--image-size",
-        "16",
-    ];
+    let settings = [&[scene][..], &BOXES_SETTINGS].concat();
     // every voxel's bytes, as carm.occ's replicated run holds them
     let carm = solve(&scratch("named-boxes-size"), &settings, &CARM);
     let all = carm["nodes"][0]["voxel_bytes"].as_u64().expect("bytes");

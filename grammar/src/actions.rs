@@ -542,27 +542,7 @@ pub fn held_tag_alternative<'a>(
         kind: one_variant(chan, tag, items, start, end),
         span: Span::new(start, end),
     };
-    let body = after.unwrap_or(Process {
-        kind: ProcessKind::Skip,
-        span: Span::new(r, r),
-    });
-    let guard = Process {
-        span: Span::new(start, during.span.end),
-        kind: ProcessKind::Extended {
-            input: Box::new(input),
-            during: Box::new(during),
-            after: None,
-        },
-    };
-    Ok(Alternative {
-        decls: Vec::new(),
-        kind: AltKind::Guarded {
-            cond,
-            guard: Box::new(guard),
-            body: Box::new(body),
-        },
-        span: Span::new(l, r),
-    })
+    Ok(extended_guard(cond, input, during, after, l, r))
 }
 
 /// Builds the ALT alternative `[cond &] c ?? x` with its process run while the outputter is
@@ -608,19 +588,32 @@ pub fn extended_alternative<'a>(
         kind: ProcessKind::Input { chan: *lhs, items },
         span,
     };
+    Ok(extended_guard(cond, input, during, after, l, r))
+}
+
+/// The ALT alternative `[cond &]` extended `input` as its guard, holding the outputter while
+/// `during` runs, with `after` (SKIP if not written) as its body; from `l` to `r`.
+fn extended_guard(
+    cond: Option<Expr>,
+    input: Process,
+    during: Process,
+    after: Option<Process>,
+    l: usize,
+    r: usize,
+) -> Alternative {
     let body = after.unwrap_or(Process {
         kind: ProcessKind::Skip,
         span: Span::new(r, r),
     });
     let guard = Process {
-        span: span.to(during.span),
+        span: input.span.to(during.span),
         kind: ProcessKind::Extended {
             input: Box::new(input),
             during: Box::new(during),
             after: None,
         },
     };
-    Ok(Alternative {
+    Alternative {
         decls: Vec::new(),
         kind: AltKind::Guarded {
             cond,
@@ -628,5 +621,5 @@ pub fn extended_alternative<'a>(
             body: Box::new(body),
         },
         span: Span::new(l, r),
-    })
+    }
 }

@@ -2,6 +2,20 @@
 
 use std::path::Path;
 
+/// The settings the boxes scene is solved with (after the scene's path): a coarse mesh, few
+/// rays and an early stop, so that a debug build spreads it over the nodes in seconds.
+pub const BOXES_SETTINGS: [&str; 9] = [
+    "--no-adapt",
+    "--rays",
+    "4",
+    "--element-size",
+    "1",
+    "--until",
+    "unshot=0.2",
+    "--image-size",
+    "16",
+];
+
 /// A room with a grid of `k` x `k` boxes on its floor under a lamp panel (metres, y up), for an
 /// octree of many voxels; written with the rooms' materials into `dir`, whose path it returns.
 pub fn boxes_scene(dir: &Path, k: usize) -> std::path::PathBuf {
