@@ -390,10 +390,10 @@ fn capacities(
         ("MAX.VOXEL", items.largest()),
         ("MAX.OBJECTS", solver.scene.objects.len()),
         // a shot's report (3 a patch), a gather's (3 an element of one patch), a refining
-        // shot's (4 a sample point)
+        // shot's (a row of 5 a sample point)
         (
             "MAX.REPORT",
-            (3 * mesh.patches.len().max(most_in_one)).max(if growth > 0 { 4 * points } else { 0 }),
+            (3 * mesh.patches.len().max(most_in_one)).max(if growth > 0 { 5 * points } else { 0 }),
         ),
     ];
     if let Some(named) = &items.named {
