@@ -303,6 +303,44 @@ pub unsafe extern "C" fn receivers_form_factors(
     unsafe { *count = written };
 }
 
+/// `PROC RAD.POINTS.RECEIVE (VAL []REAL32 factor, db, []REAL32 irradiance, RESULT INT count)`:
+/// books a shot of `db` (RGB radiosity) at n sample points: point i's irradiance (3 REAL32s)
+/// gains `db · factor[i]`, channel by channel, in REAL32 as the Rust solver adds it. `count` is
+/// n, or -1 (nothing written) when `db` is not 3 floats or `irradiance` not 3n.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+pub unsafe extern "C" fn points_receive(
+    factor: *const f32,
+    factor_len: Word,
+    db: *const f32,
+    db_len: Word,
+    irradiance: *mut f32,
+    irradiance_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (factor, db, irradiance) = unsafe {
+        (
+            array(factor, factor_len),
+            array(db, db_len),
+            array_mut(irradiance, irradiance_len),
+        )
+    };
+    let written = if db.len() == 3 && irradiance.len() == 3 * factor.len() {
+        for (&f, h) in factor.iter().zip(irradiance.chunks_exact_mut(3)) {
+            for j in 0..3 {
+                h[j] += db[j] * f;
+            }
+        }
+        factor.len() as Word
+    } else {
+        -1
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
 /// `PROC RAD.CORNERS.RECEIVE (VAL []INT point, patch, VAL []REAL64 weight, VAL []REAL32 factor,
 /// VAL []REAL32 db, rho, []REAL64 received, unshot, RESULT INT count)`: books a shot of `db`
 /// (RGB radiosity) at the n element corners a node holds. Corner c sits at sample point
@@ -841,6 +879,40 @@ mod test {
         assert_eq!(receive(bad_patch, &factor, &rho, &mut r, &mut u), -1);
         assert_eq!(receive(corners, &factor, &rho, &mut r, &mut u[..8]), -1);
         assert!(r.iter().chain(&u).all(|&x| x == 7.0));
+    }
+
+    #[test]
+    fn points_receive_adds_the_shot_to_each_point_and_refuses_bad_lengths() {
+        type Receive =
+            unsafe extern "C" fn(*const f32, Word, *const f32, Word, *mut f32, Word, *mut Word);
+        // SAFETY: the table says this is the signature.
+        let f: Receive = unsafe { std::mem::transmute(entry("RAD.POINTS.RECEIVE")) };
+        let call = |factor: &[f32], db: &[f32], irradiance: &mut [f32]| {
+            let mut count = 0;
+            // SAFETY: valid slices and result.
+            unsafe {
+                f(
+                    factor.as_ptr(),
+                    factor.len() as Word,
+                    db.as_ptr(),
+                    db.len() as Word,
+                    irradiance.as_mut_ptr(),
+                    irradiance.len() as Word,
+                    &mut count,
+                )
+            };
+            count
+        };
+        let mut h = [1.0, 2.0, 3.0, 0.0, 0.0, 0.0];
+        assert_eq!(call(&[0.5, 0.25], &[2.0, 4.0, 8.0], &mut h), 2);
+        assert_eq!(h, [2.0, 4.0, 7.0, 0.5, 1.0, 2.0]);
+        assert_eq!(call(&[0.5, 0.25], &[2.0, 4.0], &mut h), -1);
+        assert_eq!(call(&[0.5], &[2.0, 4.0, 8.0], &mut h), -1);
+        assert_eq!(
+            h,
+            [2.0, 4.0, 7.0, 0.5, 1.0, 2.0],
+            "nothing written when refused"
+        );
     }
 
     #[test]

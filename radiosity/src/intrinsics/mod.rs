@@ -206,6 +206,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: batch::receivers_form_factors as *const u8,
     },
     Intrinsic {
+        name: "RAD.POINTS.RECEIVE",
+        params: &[ValReal32s, ValReal32s, VarReal32s, ResultInt],
+        result: None,
+        addr: batch::points_receive as *const u8,
+    },
+    Intrinsic {
         name: "RAD.CORNERS.RECEIVE",
         params: &[
             ValInts, ValInts, ValReal64s, ValReal32s, ValReal32s, ValReal32s, VarReal64s,
