@@ -9,6 +9,8 @@ use std::sync::OnceLock;
 #[path = "common/boxes.rs"]
 mod boxes;
 use boxes::{BOXES_SETTINGS, boxes_scene};
+mod common;
+use common::{LAMP, means, scratch};
 
 /// The same settings for both solvers: a coarse mesh and few rays so that a debug build solves
 /// in seconds; no adaptive subdivision (`carm_subdivides_as_the_reference_solver` has it).
@@ -51,26 +53,6 @@ fn radiosity_with(out: &Path, settings: &[&str], extra: &[&str]) -> serde_json::
     );
     let text = std::fs::read_to_string(out.join("report.json")).expect("report.json written");
     serde_json::from_str(&text).expect("report.json parses")
-}
-
-/// Per object: name and mean B (RGB).
-fn means(report: &serde_json::Value) -> Vec<(String, [f64; 3])> {
-    report["objects"]
-        .as_array()
-        .expect("objects")
-        .iter()
-        .map(|o| {
-            let b = o["mean_b"].as_array().expect("mean_b");
-            let b = [0, 1, 2].map(|c| b[c].as_f64().expect("a number"));
-            (o["name"].as_str().expect("name").to_string(), b)
-        })
-        .collect()
-}
-
-fn scratch(name: &str) -> std::path::PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
 }
 
 /// The relative difference `|b - r| / |r|` of two RGB means (0 when both are zero).
@@ -302,20 +284,6 @@ fn carm_subdivides_up_to_the_point_budget() {
     );
     assert_eq!(carm["scene"]["final_vertices"], 1000);
 }
-
-/// The table lamp (an octree of eight voxels) at the settings both solvers run it with.
-const LAMP: [&str; 10] = [
-    concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj"),
-    "--no-adapt",
-    "--rays",
-    "4",
-    "--element-size",
-    "1",
-    "--until",
-    "unshot=0.05",
-    "--image-size",
-    "16",
-];
 
 /// A scene whose octree has several voxels, so that shadow rays walk from voxel to voxel.
 #[test]

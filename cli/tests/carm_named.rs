@@ -9,7 +9,7 @@ use std::path::Path;
 use std::process::Command;
 
 mod common;
-use common::{balance_error, means, scratch};
+use common::{LAMP, balance_error, means, scratch};
 
 #[path = "common/boxes.rs"]
 mod boxes;
@@ -144,18 +144,7 @@ fn named_solves_the_cornell_box_as_carm_and_the_reference() {
 /// store.
 #[test]
 fn named_spreads_the_table_lamp() {
-    let settings = [
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj"),
-        "--no-adapt",
-        "--rays",
-        "4",
-        "--element-size",
-        "1",
-        "--until",
-        "unshot=0.05",
-        "--image-size",
-        "16",
-    ];
+    let settings = LAMP;
     let flags = ["--node-memory", "2368", "--cache", "2112"];
     let report = named_agrees("named-lamp-spread", &settings, &flags);
     assert_spread(&report, 2368);

@@ -1,4 +1,6 @@
-//! Helpers the carm.occ test files share: scratch folders and what they read from report.json.
+//! Helpers the carm.occ test files share: scratch folders, what they read from report.json, the
+//! table lamp's settings. (Each file uses part of them.)
+#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 
@@ -31,3 +33,17 @@ pub fn balance_error(report: &serde_json::Value) -> f64 {
         .map(|c| (e[c] - a[c] - x[c] - u[c]).abs() / e[c])
         .fold(0.0, f64::max)
 }
+
+/// The table lamp (an octree of eight voxels) at the settings both solvers run it with.
+pub const LAMP: [&str; 10] = [
+    concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj"),
+    "--no-adapt",
+    "--rays",
+    "4",
+    "--element-size",
+    "1",
+    "--until",
+    "unshot=0.05",
+    "--image-size",
+    "16",
+];
