@@ -10,7 +10,7 @@ use std::sync::OnceLock;
 mod boxes;
 use boxes::{BOXES_SETTINGS, boxes_scene};
 mod common;
-use common::{LAMP, means, scratch};
+use common::{LAMP, apart, means, scratch, solve};
 
 /// The same settings for both solvers: a coarse mesh and few rays so that a debug build solves
 /// in seconds; no adaptive subdivision (`carm_subdivides_as_the_reference_solver` has it).
@@ -32,34 +32,7 @@ fn radiosity(out: &Path, extra: &[&str]) -> serde_json::Value {
     } else {
         &["--until", "unshot=0.05"]
     };
-    radiosity_with(out, &[SETTINGS, until].concat(), extra)
-}
-
-/// Runs `occ radiosity` with `settings`, then `extra`, into `out`; returns its report.json.
-fn radiosity_with(out: &Path, settings: &[&str], extra: &[&str]) -> serde_json::Value {
-    let output = Command::new(env!("CARGO_BIN_EXE_occ"))
-        .arg("radiosity")
-        .arg("--out")
-        .arg(out)
-        .args(settings)
-        .args(extra)
-        .output()
-        .expect("the occ binary runs");
-    assert!(
-        output.status.success(),
-        "occ radiosity {extra:?} failed:\n{}\n{}",
-        String::from_utf8_lossy(&output.stdout),
-        String::from_utf8_lossy(&output.stderr)
-    );
-    let text = std::fs::read_to_string(out.join("report.json")).expect("report.json written");
-    serde_json::from_str(&text).expect("report.json parses")
-}
-
-/// The relative difference `|b - r| / |r|` of two RGB means (0 when both are zero).
-fn apart(b: &[f64; 3], r: &[f64; 3]) -> f64 {
-    let diff = (0..3).map(|c| (b[c] - r[c]).powi(2)).sum::<f64>().sqrt();
-    let size = (0..3).map(|c| r[c].powi(2)).sum::<f64>().sqrt();
-    if size > 0.0 { diff / size } else { diff }
+    solve(out, &[SETTINGS, until].concat(), extra)
 }
 
 /// carm.occ on 4 nodes (`--threads 1`) and the reference solver, both with `extra`, into
@@ -219,7 +192,7 @@ fn vertices_by_row(out: &Path) -> Vec<u64> {
 
 #[test]
 fn carm_subdivides_as_the_reference_solver() {
-    let reference = radiosity_with(
+    let reference = solve(
         &scratch("carm-adapt-reference"),
         ADAPTIVE,
         &["--solver", "reference"],
@@ -228,7 +201,7 @@ fn carm_subdivides_as_the_reference_solver() {
     let mut first: Option<serde_json::Value> = None;
     for nodes in ["4", "40"] {
         let out = scratch(&format!("carm-adapt-{nodes}"));
-        let carm = radiosity_with(
+        let carm = solve(
             &out,
             ADAPTIVE,
             &["--solver", "carm", "--nodes", nodes, "--threads", "1"],
@@ -268,7 +241,7 @@ fn carm_subdivides_as_the_reference_solver() {
 #[test]
 fn carm_subdivides_up_to_the_point_budget() {
     let out = scratch("carm-adapt-budget");
-    let carm = radiosity_with(
+    let carm = solve(
         &out,
         &[SETTINGS[1..].to_vec(), vec!["--until", "unshot=0.05"]].concat(),
         &[
@@ -289,12 +262,12 @@ fn carm_subdivides_up_to_the_point_budget() {
 #[test]
 fn carm_walks_a_many_voxel_octree_as_the_reference_solver() {
     let settings = LAMP;
-    let reference = radiosity_with(&scratch("carm-lamp-reference"), &settings, &[]);
+    let reference = solve(&scratch("carm-lamp-reference"), &settings, &[]);
     let leaves = reference["scene"]["octree"]["leaves"]
         .as_u64()
         .expect("leaves");
     assert!(leaves > 1, "the table lamp's octree has {leaves} leaf");
-    let carm = radiosity_with(
+    let carm = solve(
         &scratch("carm-lamp"),
         &settings,
         &["--solver", "carm", "--nodes", "4", "--threads", "1"],
@@ -474,8 +447,8 @@ fn assert_spread_agrees(
     budget: impl Fn(u64) -> (u64, u64),
 ) -> serde_json::Value {
     let carm = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
-    let reference = radiosity_with(&scratch(&format!("{name}-reference")), settings, &[]);
-    let replicated = radiosity_with(&scratch(&format!("{name}-replicated")), settings, &carm);
+    let reference = solve(&scratch(&format!("{name}-reference")), settings, &[]);
+    let replicated = solve(&scratch(&format!("{name}-replicated")), settings, &carm);
     let all = all_voxel_bytes(&replicated);
     let (node, cache) = budget(all);
     let (node_s, cache_s) = (node.to_string(), cache.to_string());
@@ -486,7 +459,7 @@ fn assert_spread_agrees(
         cache_s.as_str(),
     ];
     let out = scratch(name);
-    let spread = radiosity_with(&out, settings, &[&carm[..], &spread_flags[..]].concat());
+    let spread = solve(&out, settings, &[&carm[..], &spread_flags[..]].concat());
     assert!(
         out.join("backing-store.bin")
             .metadata()

@@ -5,11 +5,8 @@
 //! that no node holds more than an eighth of the geometry; its caches' hits and misses reach
 //! report.json per node.
 
-use std::path::Path;
-use std::process::Command;
-
 mod common;
-use common::{LAMP, balance_error, means, scratch};
+use common::{LAMP, apart, balance_error, means, run, scratch, solve};
 
 #[path = "common/boxes.rs"]
 mod boxes;
@@ -20,36 +17,6 @@ const NAMED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../programs/carm-named
 
 /// carm on 4 nodes, deterministic.
 const CARM: [&str; 6] = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
-
-/// Runs `occ radiosity` with `settings`, then `extra`, into `out`; returns its report.json, or
-/// the error output when it fails.
-fn run(out: &Path, settings: &[&str], extra: &[&str]) -> Result<serde_json::Value, String> {
-    let output = Command::new(env!("CARGO_BIN_EXE_occ"))
-        .arg("radiosity")
-        .arg("--out")
-        .arg(out)
-        .args(settings)
-        .args(extra)
-        .output()
-        .expect("the occ binary runs");
-    if !output.status.success() {
-        return Err(String::from_utf8_lossy(&output.stderr).into_owned());
-    }
-    let text = std::fs::read_to_string(out.join("report.json")).expect("report.json written");
-    Ok(serde_json::from_str(&text).expect("report.json parses"))
-}
-
-/// [`run`], which must succeed.
-fn solve(out: &Path, settings: &[&str], extra: &[&str]) -> serde_json::Value {
-    run(out, settings, extra).unwrap_or_else(|e| panic!("occ radiosity {extra:?} failed:\n{e}"))
-}
-
-/// The relative difference `|b - r| / |r|` of two RGB means (0 when both are zero).
-fn apart(b: &[f64; 3], r: &[f64; 3]) -> f64 {
-    let diff = (0..3).map(|c| (b[c] - r[c]).powi(2)).sum::<f64>().sqrt();
-    let size = (0..3).map(|c| r[c].powi(2)).sum::<f64>().sqrt();
-    if size > 0.0 { diff / size } else { diff }
-}
 
 /// Every object's mean radiosity in `run` within `tolerance` of `against`'s.
 fn assert_means(run: &serde_json::Value, against: &serde_json::Value, tolerance: f64, what: &str) {

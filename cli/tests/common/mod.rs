@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
 /// A fresh scratch folder named `name` under cargo's temporary folder for tests.
 pub fn scratch(name: &str) -> PathBuf {
@@ -47,3 +48,33 @@ pub const LAMP: [&str; 10] = [
     "--image-size",
     "16",
 ];
+
+/// Runs `occ radiosity` with `settings`, then `extra`, into `out`; returns its report.json, or
+/// the error output when it fails.
+pub fn run(out: &Path, settings: &[&str], extra: &[&str]) -> Result<serde_json::Value, String> {
+    let output = Command::new(env!("CARGO_BIN_EXE_occ"))
+        .arg("radiosity")
+        .arg("--out")
+        .arg(out)
+        .args(settings)
+        .args(extra)
+        .output()
+        .expect("the occ binary runs");
+    if !output.status.success() {
+        return Err(String::from_utf8_lossy(&output.stderr).into_owned());
+    }
+    let text = std::fs::read_to_string(out.join("report.json")).expect("report.json written");
+    Ok(serde_json::from_str(&text).expect("report.json parses"))
+}
+
+/// [`run`], which must succeed.
+pub fn solve(out: &Path, settings: &[&str], extra: &[&str]) -> serde_json::Value {
+    run(out, settings, extra).unwrap_or_else(|e| panic!("occ radiosity {extra:?} failed:\n{e}"))
+}
+
+/// The relative difference `|b - r| / |r|` of two RGB means (0 when both are zero).
+pub fn apart(b: &[f64; 3], r: &[f64; 3]) -> f64 {
+    let diff = (0..3).map(|c| (b[c] - r[c]).powi(2)).sum::<f64>().sqrt();
+    let size = (0..3).map(|c| r[c].powi(2)).sum::<f64>().sqrt();
+    if size > 0.0 { diff / size } else { diff }
+}
