@@ -313,11 +313,6 @@ impl<C: ElementCorners> Connectivity<C> {
     pub fn split_edge(&mut self, a: u32, b: u32, m: u32) -> Vec<u32> {
         split_edge_in(&mut self.edges, &mut self.elements, a, b, m)
     }
-
-    /// Whether `(a, b)` is an edge of some element.
-    pub fn has_edge(&self, a: u32, b: u32) -> bool {
-        self.edges.contains_key(&edge_key(a, b))
-    }
 }
 
 /// Splits edge `(a, b)` at vertex `m` in every element of `elements` that has it: each such

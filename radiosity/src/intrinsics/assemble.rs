@@ -60,6 +60,24 @@ mod test {
             .collect()
     }
 
+    /// Calls `RAD.VOXEL.ASSEMBLE` on a name block and its triangles; returns its count.
+    fn assemble(named: &[f32], triangles: &[f32], out: &mut [f32]) -> Word {
+        let mut n: Word = 0;
+        // SAFETY: the arrays are valid for their lengths, `n` for one word.
+        unsafe {
+            voxel_assemble(
+                named.as_ptr(),
+                named.len() as Word,
+                triangles.as_ptr(),
+                triangles.len() as Word,
+                out.as_mut_ptr(),
+                out.len() as Word,
+                &mut n,
+            );
+        }
+        n
+    }
+
     #[test]
     fn every_voxel_assembles_bit_equal_to_the_hosts_block() {
         let fine = OctreeConfig {
@@ -77,19 +95,7 @@ mod test {
                 let gathered = named_triangles(block, &named.triangles);
                 let want = flat.voxel(v);
                 let mut out = vec![f32::NAN; want.len() + 3];
-                let mut n: Word = 0;
-                // SAFETY: the arrays are valid for their lengths, `n` for one word.
-                unsafe {
-                    voxel_assemble(
-                        block.as_ptr(),
-                        block.len() as Word,
-                        gathered.as_ptr(),
-                        gathered.len() as Word,
-                        out.as_mut_ptr(),
-                        out.len() as Word,
-                        &mut n,
-                    );
-                }
+                let n = assemble(block, &gathered, &mut out);
                 assert_eq!(n as usize, want.len(), "voxel {v}");
                 let bits = |xs: &[f32]| xs.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&out[..want.len()]), bits(want), "voxel {v}");
@@ -116,19 +122,7 @@ mod test {
         ];
         for (named, tris, room) in cases {
             let mut out = vec![7.0f32; room];
-            let mut n: Word = 0;
-            // SAFETY: the arrays are valid for their lengths, `n` for one word.
-            unsafe {
-                voxel_assemble(
-                    named.as_ptr(),
-                    named.len() as Word,
-                    tris.as_ptr(),
-                    tris.len() as Word,
-                    out.as_mut_ptr(),
-                    out.len() as Word,
-                    &mut n,
-                );
-            }
+            let n = assemble(named, tris, &mut out);
             assert_eq!(n, -1);
             assert!(out.iter().all(|&x| x == 7.0));
         }
