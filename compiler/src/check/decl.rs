@@ -295,7 +295,10 @@ impl Checker {
         self.dynamic_sizes = true;
         let to = self.ty(ty);
         self.dynamic_sizes = false;
-        let (from, target, assignable) = if val || !super::place::is_element(value) {
+        // A channel is not a value: `VAL CHAN OF p c RETYPES d` names channel `d` under another
+        // protocol, as the non-VAL form does (occ21 accepts both).
+        let channel = super::place::is_element(value) && self.names_channel(value);
+        let (from, target, assignable) = if (val && !channel) || !super::place::is_element(value) {
             let t = self.expr(value, None);
             (t.ty, None, false)
         } else {
@@ -325,6 +328,30 @@ impl Checker {
                 val: false,
             });
         }
+    }
+
+    /// Whether element `e`'s root name is a channel or an array of channels (before checking it).
+    fn names_channel(&self, e: &ast::Expr) -> bool {
+        let mut root = e;
+        loop {
+            match &root.kind {
+                ast::ExprKind::Subscript { base, .. } | ast::ExprKind::Slice { base, .. } => {
+                    root = base
+                }
+                ast::ExprKind::Directed { chan, .. } => root = chan,
+                _ => break,
+            }
+        }
+        let ast::ExprKind::Name(name) = &root.kind else {
+            return false;
+        };
+        self.scope.lookup(&name.text).is_some_and(|id| {
+            let mut ty = &self.sym(id).ty;
+            while let Type::Array(_, e) = ty {
+                ty = e;
+            }
+            matches!(self.out.types.underlying(ty), Type::Chan(..))
+        })
     }
 
     fn retype_sizes(&mut self, to: &Type, from: &Type, span: ast::Span) {
