@@ -5,6 +5,9 @@
 //! - the same rays through the flat octree walk a CARM node runs (`RAD.RAYS.WALK`, every voxel
 //!   held), 16 and 256 rays a call, beside `Octree::occluded` with ropes;
 //! - form factors/s (16 shadow rays each, Cornell box, light as source);
+//! - a shooting patch's density grid (`SourceDensity::of_parts`, 24 × 24 cells) over 64 and
+//!   256 elements, beside the search it replaced (the last cell's element, else every
+//!   element's closest point);
 //! - time to a converged Cornell box (reference solver; rayon uses the pool it is given, see
 //!   the `solve` group note).
 
@@ -12,7 +15,7 @@ use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
-use occ_radiosity::formfactor::FormFactorConfig;
+use occ_radiosity::formfactor::{FormFactorConfig, SourceDensity};
 use occ_radiosity::geom::Tri;
 use occ_radiosity::intrinsics::RAY_FLOATS;
 use occ_radiosity::kernels::{SamplePoint, shoot_batch};
@@ -228,5 +231,71 @@ fn solve(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, occlusion, walk, form_factors, solve);
+/// `tri` split `levels` times into four at its edges' midpoints, each part with a value.
+fn split_parts(tri: &Tri, levels: u32) -> Vec<(Tri, f32)> {
+    let mut tris = vec![*tri];
+    for _ in 0..levels {
+        tris = tris
+            .iter()
+            .flat_map(|t| {
+                let [a, b, c] = t.v;
+                let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
+                [
+                    Tri::new(a, ab, ca),
+                    Tri::new(ab, b, bc),
+                    Tri::new(ca, bc, c),
+                    Tri::new(ab, bc, ca),
+                ]
+            })
+            .collect();
+    }
+    tris.into_iter()
+        .enumerate()
+        .map(|(k, t)| (t, 1.0 + (k % 13) as f32))
+        .collect()
+}
+
+fn source_density(c: &mut Criterion) {
+    let src = Tri::new(
+        Vec3::new(0.0, 548.0, 0.0),
+        Vec3::new(556.0, 548.0, 0.0),
+        Vec3::new(556.0, 548.0, 559.0),
+    );
+    let mut group = c.benchmark_group("source_density");
+    for levels in [3u32, 4] {
+        let parts = split_parts(&src, levels);
+        let n = parts.len();
+        group.bench_function(format!("{n}_elements"), |b| {
+            b.iter(|| SourceDensity::of_parts(&src, 24, black_box(&parts)))
+        });
+        // The search of_parts replaced: the part of the last cell's centre, else the nearest.
+        group.bench_function(format!("{n}_elements_search"), |b| {
+            b.iter(|| {
+                let last = std::cell::Cell::new(0);
+                SourceDensity::new(&src, 24, |x| {
+                    if !parts[last.get()].0.contains(x) {
+                        let nearest = parts
+                            .iter()
+                            .map(|(t, _)| (t.closest_point(x) - x).length_squared())
+                            .enumerate()
+                            .fold((0, f32::MAX), |b, c| if c.1 < b.1 { c } else { b })
+                            .0;
+                        last.set(nearest);
+                    }
+                    parts[last.get()].1
+                })
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    occlusion,
+    walk,
+    form_factors,
+    source_density,
+    solve
+);
 criterion_main!(benches);

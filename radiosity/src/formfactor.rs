@@ -159,9 +159,16 @@ impl SourceDensity {
         for i in 0..g {
             for j in 0..g {
                 let (u, v) = ((i as f32 + 0.5) / g as f32, (j as f32 + 0.5) / g as f32);
-                cells.push(density(src.sample(u, v)).max(0.0));
+                cells.push(density(src.sample(u, v)));
             }
         }
+        SourceDensity::from_values(g, cells)
+    }
+
+    /// The density of the `g × g` values at the cells' centres (row by row, any scale; a
+    /// negative value counts as 0), as [`SourceDensity::new`] describes.
+    fn from_values(g: u32, mut cells: Vec<f32>) -> Option<SourceDensity> {
+        cells.iter_mut().for_each(|c| *c = c.max(0.0));
         // The warp preserves area, so every cell stands for the same area.
         let mean = cells.iter().map(|&c| c as f64).sum::<f64>() / cells.len() as f64;
         let (lo, hi) = cells
@@ -177,31 +184,79 @@ impl SourceDensity {
     }
 
     /// The density of a patch `src` made of `parts`, each a triangle of it with its unshot
-    /// radiosity (unshot power over area, channels summed): at each grid cell, the part that
-    /// contains the cell's centre (the nearest, for centres beside every part). `None` with
-    /// fewer than two parts, or as [`SourceDensity::new`]. The solver and the
-    /// `RAD.SOURCE.DENSITY` intrinsic both tabulate a shooting patch with this.
+    /// radiosity (unshot power over area, channels summed): at each grid cell, the first part
+    /// (in `parts` order) that contains the cell's centre ([`Tri::contains`]), or the nearest
+    /// part for a centre beside every part. `None` with fewer than two parts, or as [`SourceDensity::new`]. The
+    /// solver and the `RAD.SOURCE.DENSITY` intrinsic both tabulate a shooting patch with this.
+    ///
+    /// The cells are found part by part: a cell centre `src.sample(u, v)` has the barycentric
+    /// coordinates `(1 - s, v s, (1 - v) s)` with `s = √u`, so a part covers the centres of the
+    /// rows whose `s` and the columns whose `v s` lie within its own range of the two, and only
+    /// those are tested (about the grid's cells in all, where a search of every part per cell
+    /// costs their product).
     pub fn of_parts(src: &Tri, g: u32, parts: &[(Tri, f32)]) -> Option<SourceDensity> {
         if parts.len() < 2 {
             return None;
         }
-        // Neighbouring cells mostly lie in one part: the part holding the last cell's centre
-        // is tried first, and the nearest part searched for only when it fails.
-        let last = std::cell::Cell::new(0);
-        SourceDensity::new(src, g, |x| {
-            let inside = |t: &Tri| t.barycentric(x).iter().all(|&b| b >= 0.0);
-            if !inside(&parts[last.get()].0) {
-                let nearest = parts
-                    .iter()
-                    .map(|(t, _)| (t.closest_point(x) - x).length_squared())
-                    .enumerate()
-                    .fold((0, f32::MAX), |b, c| if c.1 < b.1 { c } else { b })
-                    .0;
-                last.set(nearest);
+        let g = g.max(1);
+        let gf = g as f32;
+        let centre = |i: u32, j: u32| src.sample((i as f32 + 0.5) / gf, (j as f32 + 0.5) / gf);
+        let mut owner: Vec<Option<usize>> = vec![None; (g * g) as usize];
+        // Ranges are widened by a margin: the test itself is exact, the range only selects.
+        const MARGIN: f32 = 1e-3;
+        for (k, (part, _)) in parts.iter().enumerate() {
+            let (mut s_lo, mut s_hi, mut t_lo, mut t_hi) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+            for &corner in &part.v {
+                let [a, b, _] = src.barycentric(corner);
+                let s = 1.0 - a;
+                (s_lo, s_hi) = (s_lo.min(s), s_hi.max(s));
+                (t_lo, t_hi) = (t_lo.min(b), t_hi.max(b));
             }
-            parts[last.get()].1
-        })
+            if !(s_lo.is_finite() && s_hi.is_finite() && t_lo.is_finite() && t_hi.is_finite()) {
+                continue;
+            }
+            let (s_lo, s_hi) = ((s_lo - MARGIN).max(0.0), s_hi + MARGIN);
+            let (t_lo, t_hi) = (t_lo - MARGIN, t_hi + MARGIN);
+            // Row i's s is √((i + ½) / g): rows from g s_lo² - ½ to g s_hi² - ½.
+            let rows = index_range(gf * s_lo * s_lo - 0.5, gf * s_hi * s_hi - 0.5, g);
+            for i in rows {
+                let s = ((i as f32 + 0.5) / gf).sqrt();
+                // Column j's v s is (j + ½) s / g.
+                for j in index_range(gf * t_lo / s - 0.5, gf * t_hi / s - 0.5, g) {
+                    let cell = &mut owner[(i * g + j) as usize];
+                    if cell.is_none() && part.contains(centre(i, j)) {
+                        *cell = Some(k);
+                    }
+                }
+            }
+        }
+        let mut cells = Vec::with_capacity(owner.len());
+        for i in 0..g {
+            for j in 0..g {
+                let k = owner[(i * g + j) as usize].unwrap_or_else(|| {
+                    let x = centre(i, j);
+                    parts
+                        .iter()
+                        .map(|(t, _)| (t.closest_point(x) - x).length_squared())
+                        .enumerate()
+                        .fold((0, f32::MAX), |b, c| if c.1 < b.1 { c } else { b })
+                        .0
+                });
+                cells.push(parts[k].1);
+            }
+        }
+        SourceDensity::from_values(g, cells)
     }
+}
+
+/// The indices `0..g` from `ceil(lo)` to `floor(hi)`.
+fn index_range(lo: f32, hi: f32, g: u32) -> std::ops::Range<u32> {
+    let first = lo.ceil().max(0.0);
+    let last = hi.floor().min(g as f32 - 1.0);
+    if !(first <= last) {
+        return 0..0;
+    }
+    first as u32..last as u32 + 1
 }
 
 impl<'a> SourceDensity<&'a [f32]> {
@@ -437,5 +492,77 @@ mod tests {
             &FormFactorConfig::default(),
         );
         assert_eq!(f.value, 0.0);
+    }
+
+    /// `tri` split `levels` times into four by its edges' midpoints, each part with a value.
+    pub(crate) fn split_parts(tri: &Tri, levels: u32) -> Vec<(Tri, f32)> {
+        let mut tris = vec![*tri];
+        for _ in 0..levels {
+            tris = tris
+                .iter()
+                .flat_map(|t| {
+                    let [a, b, c] = t.v;
+                    let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
+                    [
+                        Tri::new(a, ab, ca),
+                        Tri::new(ab, b, bc),
+                        Tri::new(ca, bc, c),
+                        Tri::new(ab, bc, ca),
+                    ]
+                })
+                .collect();
+        }
+        // Values that differ from part to part (and repeat rarely).
+        tris.into_iter()
+            .enumerate()
+            .map(|(k, t)| (t, 1.0 + ((k * 7919) % 101) as f32))
+            .collect()
+    }
+
+    /// The contract of `of_parts`, by searching every part at every cell.
+    fn density_by_search(src: &Tri, g: u32, parts: &[(Tri, f32)]) -> Option<SourceDensity> {
+        SourceDensity::new(src, g, |x| {
+            let first = parts.iter().position(|(t, _)| t.contains(x));
+            let k = first.unwrap_or_else(|| {
+                parts
+                    .iter()
+                    .map(|(t, _)| (t.closest_point(x) - x).length_squared())
+                    .enumerate()
+                    .fold((0, f32::MAX), |b, c| if c.1 < b.1 { c } else { b })
+                    .0
+            });
+            parts[k].1
+        })
+    }
+
+    #[test]
+    fn a_patch_density_takes_the_part_holding_each_cell_centre() {
+        let src = Tri::new(
+            Vec3::new(0.1, 0.0, 0.0),
+            Vec3::new(2.3, 0.2, 0.1),
+            Vec3::new(0.7, 1.9, -0.4),
+        );
+        for levels in 1..=4 {
+            let parts = split_parts(&src, levels);
+            let found = SourceDensity::of_parts(&src, 24, &parts).expect("not uniform");
+            assert_eq!(
+                Some(found),
+                density_by_search(&src, 24, &parts),
+                "{levels} levels"
+            );
+        }
+        // Parts in another order, and a hole: centres in it take the nearest part.
+        let mut parts = split_parts(&src, 3);
+        parts.reverse();
+        parts.remove(17);
+        let found = SourceDensity::of_parts(&src, 24, &parts).expect("not uniform");
+        assert_eq!(Some(found), density_by_search(&src, 24, &parts));
+        // A degenerate patch: no part contains anything, every centre takes the nearest.
+        let flat = Tri::new(Vec3::ZERO, Vec3::X, Vec3::X * 2.0);
+        let parts = split_parts(&flat, 2);
+        assert_eq!(
+            SourceDensity::of_parts(&flat, 8, &parts),
+            density_by_search(&flat, 8, &parts)
+        );
     }
 }

@@ -87,19 +87,33 @@ impl Tri {
         a + ab * (vb * denom) + ac * (vc * denom)
     }
 
-    /// Returns the barycentric coordinates of `p` (assumed in the triangle's plane).
+    /// Returns the barycentric coordinates of `p` (assumed in the triangle's plane); `[1, 0, 0]`
+    /// for a degenerate triangle.
     pub fn barycentric(&self, p: Vec3) -> [f32; 3] {
+        self.barycentric_of_area(p).unwrap_or([1.0, 0.0, 0.0])
+    }
+
+    /// Whether `p` (in the triangle's plane) lies in the triangle, edges included: its
+    /// [`Tri::barycentric`] coordinates are all non-negative. A degenerate triangle contains
+    /// nothing.
+    pub fn contains(&self, p: Vec3) -> bool {
+        self.barycentric_of_area(p)
+            .is_some_and(|w| w.iter().all(|&x| x >= 0.0))
+    }
+
+    /// The barycentric coordinates of `p`, `None` for a degenerate triangle.
+    fn barycentric_of_area(&self, p: Vec3) -> Option<[f32; 3]> {
         let [a, b, c] = self.v;
         let (v0, v1, v2) = (b - a, c - a, p - a);
         let (d00, d01, d11) = (v0.dot(v0), v0.dot(v1), v1.dot(v1));
         let (d20, d21) = (v2.dot(v0), v2.dot(v1));
         let denom = d00 * d11 - d01 * d01;
         if denom == 0.0 {
-            return [1.0, 0.0, 0.0];
+            return None;
         }
         let v = (d11 * d20 - d01 * d21) / denom;
         let w = (d00 * d21 - d01 * d20) / denom;
-        [1.0 - v - w, v, w]
+        Some([1.0 - v - w, v, w])
     }
 }
 
