@@ -251,9 +251,10 @@ impl SourceDensity {
 
 /// The indices `0..g` from `ceil(lo)` to `floor(hi)`.
 fn index_range(lo: f32, hi: f32, g: u32) -> std::ops::Range<u32> {
+    // (A NaN bound widens the range to the grid's edge: `max` and `min` ignore it.)
     let first = lo.ceil().max(0.0);
     let last = hi.floor().min(g as f32 - 1.0);
-    if !(first <= last) {
+    if first > last {
         return 0..0;
     }
     first as u32..last as u32 + 1
