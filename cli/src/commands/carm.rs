@@ -914,7 +914,8 @@ impl Store {
 #[derive(Clone, Debug, PartialEq)]
 enum Message {
     /// A shot: shots so far, source patch, form factors, rays, microseconds since the first
-    /// shot, power shot, the unshot fraction before it, power received per patch (RGB).
+    /// shot, power shot, the unshot fraction before it, the power (RGB) each patch that
+    /// received some received (patches ascending).
     Shot {
         shots: u64,
         src: usize,
@@ -925,7 +926,7 @@ enum Message {
         unshot_fraction: f64,
         /// The overshoot lent to the shooter before the shot and taken back after it.
         lent: DVec3,
-        received: Vec<DVec3>,
+        received: Vec<(usize, DVec3)>,
     },
     /// The irradiance at sample point `0`.
     Result(usize, Vec3),
@@ -979,7 +980,13 @@ impl Message {
                 let [shots, src, form_factors, rays, micros] = [(); 5].map(|_| r.int());
                 let (shot, unshot_fraction, lent) = (rgb64(r)?, r.real64()?, rgb64(r)?);
                 let count = usize::try_from(r.int()?).map_err(|_| Short)?;
-                let received = (0..count / 3).map(|_| rgb64(r)).collect::<Result<_, _>>()?;
+                let patches = (0..count)
+                    .map(|_| r.int().map(|p| p as usize))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let received = patches
+                    .into_iter()
+                    .map(|p| Ok((p, rgb64(r)?)))
+                    .collect::<Result<_, _>>()?;
                 Message::Shot {
                     shots: shots? as u64,
                     src: src? as usize,
@@ -1084,21 +1091,22 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
                 received,
                 ..
             } => {
+                let ascending = received.windows(2).all(|w| w[0].0 < w[1].0);
                 anyhow::ensure!(
-                    received.len() == patches && src < patches,
-                    "carm.occ reported a shot of patch {src} with {} received values",
-                    3 * received.len()
+                    src < patches && ascending && received.last().is_none_or(|r| r.0 < patches),
+                    "carm.occ reported a shot of patch {src} with the power received by {} \
+                     patches, not all of the scene's {patches} in ascending order",
+                    received.len()
                 );
                 let mut total = DVec3::ZERO;
                 let mut absorbed = DVec3::ZERO;
                 solver.unshot[src] += lent;
                 solver.unshot[src] -= shot;
-                let each = received.iter().zip(&rho).zip(&mut solver.unshot);
-                for (((power, rho), unshot), &o) in each.zip(&solver.mesh.patch_object) {
-                    total += *power;
-                    absorbed += *power * (DVec3::ONE - *rho);
-                    *unshot += *power * *rho;
-                    by_object[o as usize] += *power;
+                for &(p, power) in &received {
+                    total += power;
+                    absorbed += power * (DVec3::ONE - rho[p]);
+                    solver.unshot[p] += power * rho[p];
+                    by_object[solver.mesh.patch_object[p] as usize] += power;
                 }
                 solver.unshot[src] -= lent;
                 solver.book_totals(shot, total, absorbed);
