@@ -235,19 +235,7 @@ fn solve(c: &mut Criterion) {
 fn split_parts(tri: &Tri, levels: u32) -> Vec<(Tri, f32)> {
     let mut tris = vec![*tri];
     for _ in 0..levels {
-        tris = tris
-            .iter()
-            .flat_map(|t| {
-                let [a, b, c] = t.v;
-                let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
-                [
-                    Tri::new(a, ab, ca),
-                    Tri::new(ab, b, bc),
-                    Tri::new(ca, bc, c),
-                    Tri::new(ab, bc, ca),
-                ]
-            })
-            .collect();
+        tris = tris.iter().flat_map(Tri::quarters).collect();
     }
     tris.into_iter()
         .enumerate()

@@ -496,22 +496,10 @@ mod tests {
     }
 
     /// `tri` split `levels` times into four by its edges' midpoints, each part with a value.
-    pub(crate) fn split_parts(tri: &Tri, levels: u32) -> Vec<(Tri, f32)> {
+    fn split_parts(tri: &Tri, levels: u32) -> Vec<(Tri, f32)> {
         let mut tris = vec![*tri];
         for _ in 0..levels {
-            tris = tris
-                .iter()
-                .flat_map(|t| {
-                    let [a, b, c] = t.v;
-                    let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
-                    [
-                        Tri::new(a, ab, ca),
-                        Tri::new(ab, b, bc),
-                        Tri::new(ca, bc, c),
-                        Tri::new(ab, bc, ca),
-                    ]
-                })
-                .collect();
+            tris = tris.iter().flat_map(Tri::quarters).collect();
         }
         // Values that differ from part to part (and repeat rarely).
         tris.into_iter()

@@ -87,6 +87,19 @@ impl Tri {
         a + ab * (vb * denom) + ac * (vc * denom)
     }
 
+    /// The four triangles the midpoints of the edges cut this one into: one at each corner,
+    /// then the middle one.
+    pub fn quarters(&self) -> [Tri; 4] {
+        let [a, b, c] = self.v;
+        let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
+        [
+            Tri::new(a, ab, ca),
+            Tri::new(ab, b, bc),
+            Tri::new(ca, bc, c),
+            Tri::new(ab, bc, ca),
+        ]
+    }
+
     /// Returns the barycentric coordinates of `p` (assumed in the triangle's plane); `[1, 0, 0]`
     /// for a degenerate triangle.
     pub fn barycentric(&self, p: Vec3) -> [f32; 3] {
