@@ -745,6 +745,9 @@ pub struct AsmBlock {
     pub guy: bool,
     /// The indented lines, as written (indentation removed).
     pub lines: Vec<String>,
+    /// The offset in the text of each line's first kept byte (so `lines[i][k]` is at
+    /// `starts[i] + k`), for diagnostics on one line of the block.
+    pub starts: Vec<usize>,
 }
 
 /// A process.

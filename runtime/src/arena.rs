@@ -15,6 +15,9 @@ const CHUNK_WORDS: usize = 1 << 20;
 #[derive(Debug)]
 pub(crate) struct Arena {
     chunks: Vec<Box<[Word]>>,
+    /// The address of the first chunk's first word (0 until it exists): the base that `ASM`
+    /// blocks' 32-bit addresses are offsets from (see [`crate::abi::ADDR_BASE_OFFSET`]).
+    pub(crate) base: Word,
     /// Next free word in the last chunk.
     used: usize,
     free: HashMap<usize, Vec<Wptr>>,
@@ -27,6 +30,7 @@ impl Arena {
     pub(crate) fn new(budget: usize) -> Arena {
         Arena {
             chunks: Vec::new(),
+            base: 0,
             used: 0,
             free: HashMap::new(),
             budget,
@@ -65,6 +69,9 @@ impl Arena {
             self.chunks
                 .push(vec![0; CHUNK_WORDS.max(total)].into_boxed_slice());
             self.used = 0;
+            if self.base == 0 {
+                self.base = self.chunks[0].as_ptr() as Word;
+            }
         }
         let chunk = self.chunks.last_mut().expect("a chunk was just ensured");
         let base = chunk[self.used..].as_mut_ptr();

@@ -62,6 +62,9 @@ impl Tr<'_, '_> {
                     &self.cx.checked.types,
                     &self.cx.checked.symbols[sym].ty,
                 );
+                if let Some(kind) = self.cx.checked.chan_retypes.get(&name.span).copied() {
+                    return self.chan_retype(sym, ty, kind, value);
+                }
                 let src = self.place(value)?;
                 let size = self.loc_size(&src, value.span)?;
                 self.retype(sym, ty, written, src.addr, size)
@@ -137,6 +140,39 @@ impl Tr<'_, '_> {
         let dims = dims.into_iter().map(|d| d.unwrap_or(rest)).collect();
         let l = Loc { addr, ty, dims };
         self.bind_ref(sym, &l);
+        Ok(())
+    }
+
+    /// A RETYPES between a channel and an INT: the channel's address as an INT (a frame word),
+    /// or the channel at the address an INT holds (see `asm.rs` for the address model).
+    fn chan_retype(
+        &mut self,
+        sym: occ_compiler::checked::SymbolId,
+        ty: Type,
+        kind: occ_compiler::checked::ChanRetype,
+        value: &occ_grammar::ast::Expr,
+    ) -> Res<()> {
+        match kind {
+            occ_compiler::checked::ChanRetype::ToInt => {
+                let c = self.place(value)?.addr;
+                let v = self.int_address(c, value.span);
+                let v = self.b.ins().ireduce(types::I32, v);
+                let off = self.frame.alloc_word();
+                let a = self.local_addr(off);
+                self.store_scalar(v, a);
+                self.bind(sym, off, false);
+            }
+            occ_compiler::checked::ChanRetype::FromInt => {
+                let v = self.expr(value)?;
+                let addr = self.int_pointer(v);
+                let l = Loc {
+                    addr,
+                    ty,
+                    dims: Vec::new(),
+                };
+                self.bind_ref(sym, &l);
+            }
+        }
         Ok(())
     }
 
