@@ -160,6 +160,8 @@ pub enum ChanRetype {
 pub struct AsmCode {
     /// The instructions, in order.
     pub ops: Vec<AsmOp>,
+    /// The span of each instruction's line (for run-time errors).
+    pub spans: Vec<Span>,
     /// Words of the area the block may use below its Wptr (`RESERVELOWWS`, negative slots).
     pub low_words: u32,
     /// Words of the area at and above its Wptr (the highest slot used, plus one).

@@ -156,6 +156,14 @@ pub const YIELD_FLAG_OFFSET: i32 = 0;
 pub const ADDR_BASE_OFFSET: i32 =
     (std::mem::offset_of!(Node, arena) + std::mem::offset_of!(crate::arena::Arena, base)) as i32;
 
+/// Byte offset, from the `node` pointer, of two words: the lowest and one past the highest
+/// offset from the address base that is node memory (its workspace chunks). Compiled `ASM`
+/// code checks every address it reads or writes through against them, so a wild address is
+/// the run-time error [`ErrorKind::AddressRange`](crate::ErrorKind::AddressRange), never an
+/// access outside the node's memory.
+pub const ADDR_LIMITS_OFFSET: i32 =
+    (std::mem::offset_of!(Node, arena) + std::mem::offset_of!(crate::arena::Arena, limits)) as i32;
+
 /// Byte offsets into the node that compiled code's inline channel fast path reads and writes
 /// (see `rt_preempt`): the running priority (a word), the two run queues (`[front, back]` word
 /// pairs, high priority first) and the communications counter (a `u64`).

@@ -8,6 +8,10 @@ use std::collections::HashMap;
 use crate::abi::{Word, Wptr, slot};
 use crate::error::RunError;
 
+/// The offset from the address base of the first chunk: INT addresses below it are never
+/// node memory.
+const ADDR_GUARD: Word = 1 << 16;
+
 /// Words per chunk requested from the system (8 MB).
 const CHUNK_WORDS: usize = 1 << 20;
 
@@ -15,9 +19,13 @@ const CHUNK_WORDS: usize = 1 << 20;
 #[derive(Debug)]
 pub(crate) struct Arena {
     chunks: Vec<Box<[Word]>>,
-    /// The address of the first chunk's first word (0 until it exists): the base that `ASM`
-    /// blocks' 32-bit addresses are offsets from (see [`crate::abi::ADDR_BASE_OFFSET`]).
+    /// [`ADDR_GUARD`] bytes before the first chunk's first word (0 until it exists): the base
+    /// that `ASM` blocks' 32-bit addresses are offsets from (see
+    /// [`crate::abi::ADDR_BASE_OFFSET`]).
     pub(crate) base: Word,
+    /// The byte offsets from `base` of the lowest and one past the highest chunk byte: the
+    /// range an `ASM` address must fall in (see [`crate::abi::ADDR_LIMITS_OFFSET`]).
+    pub(crate) limits: [Word; 2],
     /// Next free word in the last chunk.
     used: usize,
     free: HashMap<usize, Vec<Wptr>>,
@@ -31,6 +39,7 @@ impl Arena {
         Arena {
             chunks: Vec::new(),
             base: 0,
+            limits: [0, 0],
             used: 0,
             free: HashMap::new(),
             budget,
@@ -69,9 +78,19 @@ impl Arena {
             self.chunks
                 .push(vec![0; CHUNK_WORDS.max(total)].into_boxed_slice());
             self.used = 0;
+            let chunk = self.chunks.last().expect("a chunk was just pushed");
+            let start = chunk.as_ptr() as Word;
             if self.base == 0 {
-                self.base = self.chunks[0].as_ptr() as Word;
+                // Small numbers are never addresses: an INT used by mistake as one is an
+                // error, not a write to the first frames.
+                self.base = start - ADDR_GUARD;
+                self.limits = [ADDR_GUARD, ADDR_GUARD];
             }
+            let end = start - self.base + (chunk.len() * size_of::<Word>()) as Word;
+            self.limits = [
+                self.limits[0].min(start - self.base),
+                self.limits[1].max(end),
+            ];
         }
         let chunk = self.chunks.last_mut().expect("a chunk was just ensured");
         let base = chunk[self.used..].as_mut_ptr();

@@ -49,7 +49,8 @@ pub enum ErrorKind {
     /// Occurs when a replicator's count is negative.
     ReplicatorCount = 14,
     /// Occurs when an `ASM` block takes the address of memory more than 2 GB from the node's
-    /// address base, which an INT (32 bits) cannot hold (see [`crate::abi::ADDR_BASE_OFFSET`]).
+    /// address base, which an INT (32 bits) cannot hold (see [`crate::abi::ADDR_BASE_OFFSET`]),
+    /// or reads or writes through an address outside the node's memory.
     AddressRange = 15,
 }
 
@@ -98,9 +99,7 @@ impl ErrorKind {
             ErrorKind::Stopped => "stopped because another node of the network failed",
             ErrorKind::Floating => "floating-point error: REAL division by zero",
             ErrorKind::ReplicatorCount => "negative replicator count",
-            ErrorKind::AddressRange => {
-                "ASM address out of range: not within 2 GB of the node's address base"
-            }
+            ErrorKind::AddressRange => "ASM address out of range: outside the node's memory",
         }
     }
 }

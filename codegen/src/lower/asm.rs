@@ -22,7 +22,7 @@ use occ_compiler::checked::{AsmCode, AsmOp, SymbolId};
 use occ_compiler::types::{Prim, Type};
 use occ_grammar::ast::{Expr, ExprKind, Span};
 use occ_runtime::ErrorKind;
-use occ_runtime::abi::{ADDR_BASE_OFFSET, Entry, frame, word_offset};
+use occ_runtime::abi::{ADDR_BASE_OFFSET, ADDR_LIMITS_OFFSET, Entry, frame, word_offset};
 
 use super::{Res, Storage, Tr, mem};
 use crate::layout::{cl_type, is_scalar};
@@ -73,8 +73,9 @@ impl Tr<'_, '_> {
             .count();
         let blocks: Vec<Block> = (0..labels).map(|_| self.b.create_block()).collect();
         let mut placed = vec![false; labels];
-        for op in &code.ops {
-            self.asm_op(op, r, &blocks, &mut placed, wptr, image, span)?;
+        for (i, op) in code.ops.iter().enumerate() {
+            let at = code.spans.get(i).copied().unwrap_or(span);
+            self.asm_op(op, r, &blocks, &mut placed, wptr, image, at)?;
         }
         self.frame.release(mark);
         Ok(())
@@ -176,7 +177,7 @@ impl Tr<'_, '_> {
                 self.b.def_var(r.a, v);
             }
             AsmOp::Lb => {
-                let p = self.use_addr(r.a);
+                let p = self.use_addr(r.a, 0, 1, span);
                 let v = self.b.ins().uload8(types::I64, mem(), p, 0);
                 self.b.def_var(r.a, v);
             }
@@ -200,16 +201,15 @@ impl Tr<'_, '_> {
                 self.b.def_var(r.a, w);
             }
             AsmOp::Ldnl(n) => {
-                let p = self.use_addr(r.a);
-                let off = (*n * ASM_WORD) as i32;
-                let v = self.b.ins().sload32(mem(), p, off);
+                let p = self.use_addr(r.a, *n * ASM_WORD, ASM_WORD, span);
+                let v = self.b.ins().sload32(mem(), p, 0);
                 self.b.def_var(r.a, v);
             }
             AsmOp::Stnl(n) => {
-                let p = self.use_addr(r.a);
+                let p = self.use_addr(r.a, *n * ASM_WORD, ASM_WORD, span);
                 let b = self.b.use_var(r.b);
                 let v = self.b.ins().ireduce(types::I32, b);
-                self.b.ins().store(mem(), v, p, (*n * ASM_WORD) as i32);
+                self.b.ins().store(mem(), v, p, 0);
                 self.pop(r);
                 self.pop(r);
             }
@@ -303,23 +303,39 @@ impl Tr<'_, '_> {
         w
     }
 
-    /// The pointer of the INT address in register `v`.
-    fn use_addr(&mut self, v: Variable) -> Value {
+    /// The pointer `disp` bytes past the INT address in register `v`, checked to be `bytes`
+    /// of node memory.
+    fn use_addr(&mut self, v: Variable, disp: i64, bytes: i64, span: Span) -> Value {
         let a = self.b.use_var(v);
-        self.int_pointer(a)
+        self.int_pointer(a, disp, bytes, span)
     }
 
-    /// The pointer of INT address `v` (of any integer width).
-    pub(super) fn int_pointer(&mut self, v: Value) -> Value {
+    /// The pointer `disp` bytes past INT address `v` (of any integer width): a run-time error
+    /// unless the `bytes` there are node memory (see `ADDR_LIMITS_OFFSET`).
+    pub(super) fn int_pointer(&mut self, v: Value, disp: i64, bytes: i64, span: Span) -> Value {
         let v = match self.b.func.dfg.value_type(v) {
             types::I64 => v,
             _ => self.b.ins().sextend(types::I64, v),
         };
         let w = self.word(v);
+        let off = self.b.ins().iadd_imm_s(w, disp);
+        let flags = MemFlagsData::trusted();
+        let low = self
+            .b
+            .ins()
+            .load(types::I64, flags, self.node, ADDR_LIMITS_OFFSET);
+        let high = self
+            .b
+            .ins()
+            .load(types::I64, flags, self.node, ADDR_LIMITS_OFFSET + 8);
+        let end = self.b.ins().iadd_imm_s(off, bytes);
+        let above = self.b.ins().icmp(IntCC::SignedGreaterThanOrEqual, off, low);
+        let below = self.b.ins().icmp(IntCC::SignedLessThanOrEqual, end, high);
+        let ok = self.b.ins().band(above, below);
+        self.check(ok, ErrorKind::AddressRange, span);
         let base = self.addr_base();
-        self.b.ins().iadd(base, w)
+        self.b.ins().iadd(base, off)
     }
-
 
     /// A backward `J` polls for a timeslice (its resume point starts with an empty stack).
     fn asm_jump(&mut self, target: Block, backward: bool, r: Regs, span: Span) {
@@ -453,7 +469,7 @@ impl Tr<'_, '_> {
         let a = self.b.ins().ireduce(types::I32, a);
         let off = self.frame.alloc_word();
         self.b.ins().store(mem(), a, self.ws, off);
-        let chan = self.use_addr(r.b);
+        let chan = self.use_addr(r.b, 0, 8, span);
         let data = self.local_addr(off);
         let len = self.iconst(ASM_WORD);
         self.blocking(Entry::Out, &[self.node, self.ws, chan, data, len], span)?;
@@ -512,9 +528,8 @@ impl Tr<'_, '_> {
             let v = if *by_value {
                 self.narrow_word(v, *p)
             } else {
-                let w = self.word(v);
-                let base = self.addr_base();
-                self.b.ins().iadd(base, w)
+                let bytes = i64::from(p.bytes());
+                self.int_pointer(v, 0, bytes, span)
             };
             stores.push((*off, vec![v]));
         }

@@ -164,7 +164,7 @@ impl Tr<'_, '_> {
             }
             occ_compiler::checked::ChanRetype::FromInt => {
                 let v = self.expr(value)?;
-                let addr = self.int_pointer(v);
+                let addr = self.int_pointer(v, 0, crate::layout::WORD, value.span);
                 let l = Loc {
                     addr,
                     ty,
@@ -237,6 +237,20 @@ impl Tr<'_, '_> {
 
     /// Binds `sym` to a table of the addresses of the channels `items`.
     fn chan_table(&mut self, sym: occ_compiler::checked::SymbolId, items: &[Expr]) -> Res<()> {
+        if self.consecutive_channels(items) {
+            // `[a[0], a[1], a[2]]` is the segment `[a FROM 0 FOR 3]`: bound as that segment,
+            // it can be passed whole as an array of channels.
+            let first = self.place(&items[0])?;
+            let ty = Type::Array(Some(items.len() as u32), Box::new(first.ty));
+            let n = self.iconst(items.len() as i64);
+            let l = Loc {
+                addr: first.addr,
+                ty,
+                dims: vec![n],
+            };
+            self.bind_ref(sym, &l);
+            return Ok(());
+        }
         let off = self.frame.alloc_words(items.len());
         for (k, item) in items.iter().enumerate() {
             let l = self.place(item)?;
@@ -252,6 +266,35 @@ impl Tr<'_, '_> {
         };
         self.cx.env.insert(sym, st);
         Ok(())
+    }
+
+    /// Whether `items` are `a[k]`, `a[k + 1]`, ... of one array `a` of channels, with constant
+    /// subscripts.
+    fn consecutive_channels(&self, items: &[Expr]) -> bool {
+        let mut prev: Option<(occ_compiler::checked::SymbolId, i64)> = None;
+        for item in items {
+            let ExprKind::Subscript { base, index } = &item.kind else {
+                return false;
+            };
+            let ExprKind::Name(n) = &base.kind else {
+                return false;
+            };
+            let (Ok(sym), Some(k)) = (
+                self.cx.symbol(n),
+                self.cx
+                    .checked
+                    .constants
+                    .get(&index.span)
+                    .and_then(|c| c.as_int()),
+            ) else {
+                return false;
+            };
+            if prev.is_some_and(|(s, j)| s != sym || j + 1 != k) {
+                return false;
+            }
+            prev = Some((sym, k));
+        }
+        prev.is_some()
     }
 
     /// Binds `sym` by reference to place `l` (address and dimension lengths in the frame).

@@ -78,7 +78,9 @@ struct Block {
     ajw_n: i64,
     /// The number of values on the stack, while it is known (straight-line code).
     depth: Option<usize>,
-    ops: Vec<Pending>,
+    /// The span of the line being checked.
+    span: Span,
+    ops: Vec<(Pending, Span)>,
 }
 
 impl Checker {
@@ -170,6 +172,7 @@ impl Checker {
 
     /// Checks one instruction and appends its ops.
     fn asm_instr(&mut self, i: &Instr, b: &mut Block) -> Option<()> {
+        b.span = i.span;
         let code = i.code.as_str();
         let ops = &i.operands;
         let count = |n: usize| ops.len() == n;
@@ -177,7 +180,7 @@ impl Checker {
             "" => {
                 let name = text(&ops[0]);
                 let at = b.labels.iter().position(|(n, _)| *n == name)?;
-                b.ops.push(Pending::Op(AsmOp::Label(at)));
+                b.push_op(AsmOp::Label(at));
                 b.depth = None;
             }
             "BYTE" | "WORD" => {}
@@ -222,7 +225,7 @@ impl Checker {
                 } else {
                     AsmOp::CondJump(at)
                 };
-                b.ops.push(Pending::Op(op));
+                b.push_op(op);
                 b.depth = if code == "J" {
                     None
                 } else {
@@ -235,21 +238,21 @@ impl Checker {
             }
             "LDPI" if count(0) => {
                 let at = (b.base + b.image.len()) as i64;
-                b.ops.push(Pending::Op(AsmOp::Ldpi(at)));
+                b.push_op(AsmOp::Ldpi(at));
             }
-            "LB" if count(0) => b.ops.push(Pending::Op(AsmOp::Lb)),
+            "LB" if count(0) => b.push_op(AsmOp::Lb),
             "WSUB" if count(0) => push(b, AsmOp::Wsub, -1),
             "POP" if count(0) => push(b, AsmOp::Pop, -1),
-            "REV" if count(0) => b.ops.push(Pending::Op(AsmOp::Rev)),
+            "REV" if count(0) => b.push_op(AsmOp::Rev),
             "OUTWORD" if count(0) => {
-                b.ops.push(Pending::Op(AsmOp::Outword));
+                b.push_op(AsmOp::Outword);
                 b.depth = Some(0);
             }
             "ADC" if count(1) && !self.asm_is_constant(&ops[0]) => {
                 let e = self.asm_expr(&ops[0])?;
                 match self.asm_value(&e)? {
-                    AsmOp::Load(e) => b.ops.push(Pending::Op(AsmOp::AdcValue(e))),
-                    AsmOp::Const(n) => b.ops.push(Pending::Op(AsmOp::Adc(n))),
+                    AsmOp::Load(e) => b.push_op(AsmOp::AdcValue(e)),
+                    AsmOp::Const(n) => b.push_op(AsmOp::Adc(n)),
                     _ => return None,
                 }
             }
@@ -498,7 +501,7 @@ impl Checker {
             ajw_ws: b.ajw_ws,
             ajw_n: b.ajw_n,
         };
-        b.ops.push(Pending::Slot(slot));
+        b.ops.push((Pending::Slot(slot), b.span));
         let d = if matches!(kind, SlotKind::Store) {
             -1
         } else {
@@ -596,7 +599,7 @@ impl Checker {
             let skip_link = b.depth == Some(params.len() + 1);
             AsmOp::CallProc { sym: id, skip_link }
         };
-        b.ops.push(Pending::Op(op));
+        b.push_op(op);
         b.depth = if function { Some(1) } else { Some(0) };
         Some(())
     }
@@ -651,9 +654,16 @@ fn word_sized(ty: &Type) -> bool {
     )
 }
 
+impl Block {
+    /// Appends `op`, at the line being checked.
+    fn push_op(&mut self, op: AsmOp) {
+        self.ops.push((Pending::Op(op), self.span));
+    }
+}
+
 /// Appends `op` and follows the stack depth by `d`.
 fn push(b: &mut Block, op: AsmOp, d: i64) {
-    b.ops.push(Pending::Op(op));
+    b.push_op(op);
     b.depth = b.depth.map(|x| ((x as i64 + d).clamp(0, 3)) as usize);
 }
 
@@ -663,17 +673,22 @@ fn finish(b: &mut Block) -> AsmCode {
         .ops
         .iter()
         .filter_map(|p| match p {
-            Pending::Slot(Slot {
-                base: SlotBase::Number(n),
-                ..
-            }) if *n >= 0 => Some(*n + 1),
+            (
+                Pending::Slot(Slot {
+                    base: SlotBase::Number(n),
+                    ..
+                }),
+                _,
+            ) if *n >= 0 => Some(*n + 1),
             _ => None,
         })
         .max()
         .unwrap_or(0);
     let ws_size = numbered + 2;
     let (mut low, mut high) = (i64::from(b.reserve), 0i64);
-    let ops = std::mem::take(&mut b.ops)
+    let (pending, spans): (Vec<Pending>, Vec<Span>) =
+        std::mem::take(&mut b.ops).into_iter().unzip();
+    let ops = pending
         .into_iter()
         .map(|p| match p {
             Pending::Op(op) => op,
@@ -697,6 +712,7 @@ fn finish(b: &mut Block) -> AsmCode {
         .collect();
     AsmCode {
         ops,
+        spans,
         low_words: u32::try_from(low).unwrap_or(u32::MAX),
         high_words: u32::try_from(high).unwrap_or(u32::MAX),
     }
