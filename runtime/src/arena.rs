@@ -114,3 +114,32 @@ impl Arena {
         self.peak as u64
     }
 }
+
+#[cfg(test)]
+mod test {
+    use super::*;
+
+    /// Every workspace is node memory as `ASM` addresses see it: at or past the guard, inside
+    /// the limits, however many chunks there are.
+    #[test]
+    fn workspaces_fall_inside_the_address_limits() {
+        let mut arena = Arena::new(64 << 20);
+        assert_eq!(arena.base, 0, "no base before the first chunk");
+        let mut spans = Vec::new();
+        for words in [10, CHUNK_WORDS - 100, 50, CHUNK_WORDS] {
+            let ws = arena.alloc(words).expect("within the budget") as Word;
+            spans.push((ws, words));
+        }
+        assert!(arena.chunks.len() >= 2, "the test spans chunks");
+        for (ws, words) in spans {
+            let off = ws - arena.base;
+            let end = off + (words * size_of::<Word>()) as Word;
+            assert!(
+                off >= arena.limits[0] && end <= arena.limits[1],
+                "{off}..{end}"
+            );
+        }
+        let first = arena.chunks[0].as_ptr() as Word;
+        assert_eq!(first - arena.base, ADDR_GUARD);
+    }
+}

@@ -749,7 +749,7 @@ fn split_lines(block: &ast::AsmBlock, span: Span) -> Vec<Instr> {
     let mut pending: Vec<Char> = Vec::new();
     let mut depth = 0i32;
     for (li, line) in block.lines.iter().enumerate() {
-        let start = block.starts.get(li).copied().unwrap_or(span.start);
+        let start = block.line_spans.get(li).map_or(span.start, |s| s.start);
         let mut quote: Option<char> = None;
         let chars: Vec<(usize, char)> = line.char_indices().collect();
         let mut k = 0;
