@@ -156,10 +156,20 @@ impl Checker {
                     return None;
                 }
             };
-            if word {
-                out.extend_from_slice(&(n as i32).to_le_bytes());
+            let fits = if word {
+                i32::try_from(n).is_ok() || u32::try_from(n).is_ok()
             } else {
-                out.push(n as u8);
+                u8::try_from(n).is_ok()
+            };
+            if !fits {
+                let what = if word { "a word" } else { "a byte" };
+                self.asm_error(format!("`{}`: {n} does not fit {what}", text(o)), e.span);
+                return None;
+            }
+            if word {
+                out.extend_from_slice(&(n as u32).to_le_bytes());
+            } else {
+                out.extend_from_slice(&n.to_le_bytes()[..1]);
             }
         }
         Some(out)
