@@ -38,6 +38,27 @@ struct Regs {
     c: Variable,
 }
 
+/// The state of the block being lowered.
+struct Lowering {
+    r: Regs,
+    /// One block per label, and whether it is placed yet (a jump to it is backward).
+    labels: Vec<(Block, bool)>,
+    /// The byte offset of the block's Wptr in the frame.
+    wptr: i32,
+    /// The byte offset of the copy of the code image, when `LDPI` needs one.
+    image: Option<i32>,
+}
+
+impl Lowering {
+    /// Label `i`'s block and whether it is placed.
+    fn label(&self, i: usize, span: Span, tr: &Tr<'_, '_>) -> Res<(Block, bool)> {
+        self.labels
+            .get(i)
+            .copied()
+            .ok_or_else(|| tr.cx.internal(span, "an ASM label out of range"))
+    }
+}
+
 impl Tr<'_, '_> {
     /// Reserves, for the function whose code is at `span`, the workspace area that the `ASM`
     /// blocks inside it use (the largest any of them needs), so that they all share one Wptr.
@@ -71,11 +92,17 @@ impl Tr<'_, '_> {
             .iter()
             .filter(|o| matches!(o, AsmOp::Label(_)))
             .count();
-        let blocks: Vec<Block> = (0..labels).map(|_| self.b.create_block()).collect();
-        let mut placed = vec![false; labels];
+        let mut st = Lowering {
+            r,
+            labels: (0..labels)
+                .map(|_| (self.b.create_block(), false))
+                .collect(),
+            wptr,
+            image,
+        };
         for (i, op) in code.ops.iter().enumerate() {
             let at = code.spans.get(i).copied().unwrap_or(span);
-            self.asm_op(op, r, &blocks, &mut placed, wptr, image, at)?;
+            self.asm_op(op, &mut st, at)?;
         }
         self.frame.release(mark);
         Ok(())
@@ -109,20 +136,9 @@ impl Tr<'_, '_> {
         Some(off)
     }
 
-    #[allow(
-        clippy::too_many_arguments,
-        reason = "the block's lowering state, passed down"
-    )]
-    fn asm_op(
-        &mut self,
-        op: &AsmOp,
-        r: Regs,
-        labels: &[Block],
-        placed: &mut [bool],
-        wptr: i32,
-        image: Option<i32>,
-        span: Span,
-    ) -> Res<()> {
+    /// Lowers one instruction; `span` is its line.
+    fn asm_op(&mut self, op: &AsmOp, st: &mut Lowering, span: Span) -> Res<()> {
+        let (r, wptr, image) = (st.r, st.wptr, st.image);
         match op {
             AsmOp::Const(n) => {
                 let v = self.iconst(*n);
@@ -154,16 +170,20 @@ impl Tr<'_, '_> {
                 self.b.def_var(r.b, a);
             }
             AsmOp::Label(i) => {
-                let blk = labels[*i];
-                placed[*i] = true;
-                self.b.ins().jump(blk, &[]);
-                self.b.switch_to_block(blk);
+                let label = st.label(*i, span, self)?;
+                st.labels[*i].1 = true;
+                self.b.ins().jump(label.0, &[]);
+                self.b.switch_to_block(label.0);
             }
-            AsmOp::Jump(i) => self.asm_jump(labels[*i], placed[*i], r, span),
+            AsmOp::Jump(i) => {
+                let (target, backward) = st.label(*i, span, self)?;
+                self.asm_jump(target, backward, r, span);
+            }
             AsmOp::CondJump(i) => {
+                let (target, _) = st.label(*i, span, self)?;
                 let a = self.b.use_var(r.a);
                 let cont = self.b.create_block();
-                self.b.ins().brif(a, cont, &[], labels[*i], &[]);
+                self.b.ins().brif(a, cont, &[], target, &[]);
                 self.b.switch_to_block(cont);
                 self.pop(r);
             }
