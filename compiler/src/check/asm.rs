@@ -805,7 +805,7 @@ fn split_lines(block: &ast::AsmBlock, span: Span) -> Vec<Instr> {
             });
             k += 1;
         }
-        if depth > 0 {
+        if depth > 0 || continues(&pending) {
             continue;
         }
         depth = 0;
@@ -819,6 +819,20 @@ fn split_lines(block: &ast::AsmBlock, span: Span) -> Vec<Instr> {
         out.push(instr(pending));
     }
     out
+}
+
+/// Whether an instruction line goes on to the next line, as an occam line does: after a comma
+/// or an operator (`AND`, `OR` and the symbols, except the `-` of `AJW -` before `.WSSIZE`).
+fn continues(pending: &[Char]) -> bool {
+    let text: String = pending.iter().map(|c| c.c).collect();
+    let text = text.trim_end();
+    let words: Vec<&str> = text.split_whitespace().collect();
+    let ajw_minus = matches!(words.as_slice(), [w, "-"] if w.eq_ignore_ascii_case("AJW"));
+    let symbol = text.ends_with([',', '+', '-', '*', '/', '\\', '<', '>', '=', '~']);
+    let keyword = words
+        .last()
+        .is_some_and(|w| ["AND", "OR", "PLUS", "MINUS", "TIMES"].contains(w));
+    words.len() > 1 && !ajw_minus && (symbol || keyword)
 }
 
 /// One instruction from its characters.
