@@ -33,8 +33,17 @@ pub struct Parse {
 /// Parses the preprocessed `text` into a program. The program is returned even when there are
 /// errors (with the erroneous lines skipped); `diagnostics` then holds at least one error.
 pub fn parse(text: &str) -> Parse {
+    parse_shifted(text, 0)
+}
+
+/// [`parse`], with every token's offsets (so every span of the program) `delta` further on.
+fn parse_shifted(text: &str, delta: usize) -> Parse {
     let lexed = crate::layout::lex(text);
-    let (tokens, mut diagnostics) = (lexed.tokens, lexed.diagnostics);
+    let (mut tokens, mut diagnostics) = (lexed.tokens, lexed.diagnostics);
+    for (l, _, r) in &mut tokens {
+        *l += delta;
+        *r += delta;
+    }
     let lexed_all = !lexed.dropped;
     let empty = Program {
         decls: Vec::new(),
@@ -226,19 +235,21 @@ pub fn parse_expression(lines: &[(usize, &str)]) -> Result<crate::ast::Expr, Vec
             "here",
         )]);
     }
-    // `VAL asm IS <operand> :`, the operand's lines at their own offsets and everything else
-    // blank, so that the expression's spans are those of the program.
-    let mut wrapped = String::with_capacity(end + 3);
+    // `VAL asm IS <operand> :`, each line of the operand `delta` bytes before its own offset
+    // and the gaps between them blank; the tokens are moved on by `delta`, so that the
+    // expression's spans are those of the program.
+    let delta = first - (HEAD.len() + 1);
+    let mut wrapped = String::with_capacity(end - delta + 3);
     wrapped.push_str(HEAD);
     for (at, line) in lines {
-        while wrapped.len() + 1 < *at {
+        while wrapped.len() + 1 < at - delta {
             wrapped.push(' ');
         }
         wrapped.push('\n');
         wrapped.push_str(line);
     }
     wrapped.push_str(" :\n");
-    let parsed = parse(&wrapped);
+    let parsed = parse_shifted(&wrapped, delta);
     let errors: Vec<Diagnostic> = parsed
         .diagnostics
         .into_iter()
