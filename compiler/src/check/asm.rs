@@ -15,6 +15,10 @@ use crate::diagnostic::DiagnosticKind;
 use crate::types::{Prim, Type};
 use crate::usage::Mode;
 
+/// The furthest a block's workspace slots (and `RESERVELOWWS`) may reach from its Wptr, in
+/// words: a frame keeps room for all of them.
+const MAX_SLOTS: u32 = 1 << 16;
+
 /// One character of a block's text with its offset in the program text and its line.
 #[derive(Clone, Copy)]
 struct Char {
@@ -99,6 +103,11 @@ impl Checker {
         if ok && self.shadow == 0 {
             self.asm_labels.extend(b.labels.iter().cloned());
             let code = finish(&mut b);
+            if code.low_words.max(code.high_words) > MAX_SLOTS {
+                let what = format!("the block's workspace slots reach beyond {MAX_SLOTS} words");
+                self.asm_error(what, span);
+                return;
+            }
             self.out.asm_image.append(&mut b.image);
             self.out.asm.insert(span, code);
         }
@@ -112,6 +121,9 @@ impl Checker {
             match i.code.as_str() {
                 "" => {
                     let name = text(&i.operands[0]);
+                    if name.is_empty() || name.contains(char::is_whitespace) {
+                        ok &= self.asm_error("a label is `:` and a name".into(), i.span);
+                    }
                     if b.labels.iter().any(|(n, _)| *n == name) {
                         ok &=
                             self.asm_error(format!("the label `:{name}` is defined twice"), i.span);
@@ -352,7 +364,11 @@ impl Checker {
         let e = self.asm_expr(o)?;
         let t = self.expr(&e, Some(&Type::Prim(Prim::Int)));
         match t.value.as_ref().and_then(Value::as_int) {
-            Some(n) => Some(n),
+            Some(n) if i32::try_from(n).is_ok() => Some(n),
+            Some(n) => {
+                self.asm_error(format!("{n} does not fit a 32-bit word"), e.span);
+                None
+            }
             None => {
                 self.asm_error(format!("`{}` is not an INT constant", text(o)), e.span);
                 None
