@@ -9,12 +9,16 @@
 //! `OUTWORD` and `CALL` of a PROC are blocking points: nothing is kept in the variables across
 //! them (the transputer's stack is undefined after them too), so they read 0 afterwards.
 //!
-//! An address is an INT: its byte offset from the node's address base, checked to fit 32 bits
-//! when a pointer becomes one. Numbered workspace slots are 32-bit words of an area of the
-//! frame (reserved when the function starts for all the blocks in it: `RESERVELOWWS` words
-//! below the area's Wptr, the highest slot used above it), so no `LDL`/`STL`/`LDLP` slot
-//! reaches memory the process does not own. Constants, tables and the block's `BYTE`/`WORD`
-//! image are copied into frame temporaries when their address is taken.
+//! An address is an INT: its byte offset from the node's address base (`ADDR_BASE_OFFSET`),
+//! checked to fit 32 bits when a pointer becomes one; every read or write through an address
+//! is checked to fall in the node's workspace memory (`ADDR_LIMITS_OFFSET`), so a wild address
+//! is a run-time error rather than an access outside the node.
+//!
+//! Numbered workspace slots are 32-bit words of an area of the frame (reserved when the
+//! function starts for all the blocks in it: `RESERVELOWWS` words below the area's Wptr, the
+//! highest slot used above it), so no `LDL`/`STL`/`LDLP` slot reaches memory the process does
+//! not own. Constants, tables and the program's `BYTE`/`WORD` image are copied into frame
+//! temporaries when their address is taken.
 
 use cranelift_codegen::ir::{Block, InstBuilder, MemFlagsData, Value, condcodes::IntCC, types};
 use cranelift_frontend::Variable;
