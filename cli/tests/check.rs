@@ -110,13 +110,13 @@ fn the_stdlib_is_found_with_no_stdlib_folder() {
     assert!(output.status.success(), "{stderr}");
 }
 
-/// An `ASM` block beyond the subset that runs here is refused at the block, naming the subset.
+/// An `ASM` instruction occ does not run is refused at its own line, naming it.
 #[test]
-fn an_asm_block_beyond_the_subset_is_refused_at_its_line() {
+fn an_asm_instruction_beyond_those_that_run_is_refused_at_its_line() {
     let dir = std::env::temp_dir().join(format!("occ-check-{}-asm", std::process::id()));
     fs::create_dir_all(&dir).expect("temporary folder");
     let file = dir.join("prog.occ");
-    let source = "PROC p ()\n  INT x:\n  ASM\n    LD ADDRESSOF x\n    LDNL 0\n    ST x\n:\n";
+    let source = "PROC p ()\n  INT x:\n  ASM\n    LD ADDRESSOF x\n    FPLDNLSN\n    ST x\n:\n";
     fs::write(&file, source).expect("program file");
     let output = Command::new(env!("CARGO_BIN_EXE_occ"))
         .arg("run")
@@ -127,7 +127,10 @@ fn an_asm_block_beyond_the_subset_is_refused_at_its_line() {
     let _ = fs::remove_dir_all(&dir);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success(), "{stderr}");
-    for text in ["ASM / GUY blocks beyond LDC, LD", "prog.occ:3:3"] {
+    for text in [
+        "`FPLDNLSN` is not a transputer instruction occ runs",
+        "prog.occ:5:5",
+    ] {
         assert!(stderr.contains(text), "missing `{text}` in\n{stderr}");
     }
 }

@@ -13,7 +13,7 @@
 
 pub use crate::fxhash::FxHashMap;
 
-use occ_grammar::ast::{AbbrevMode, ParamMode, Span};
+use occ_grammar::ast::{self, AbbrevMode, ParamMode, Span};
 
 use crate::consteval::Value;
 use crate::entity::PrimaryMap;
@@ -129,24 +129,100 @@ pub struct CheckedProgram {
     pub operators: FxHashMap<Span, SymbolId>,
     /// The network configured by the last PROC's `PLACED PAR`, if it has one.
     pub network: Option<crate::network::Network>,
-    /// `ASM` blocks written in the subset that runs here (see [`AsmOp`]), by the block's span.
-    pub asm: FxHashMap<Span, Vec<AsmOp>>,
+    /// `ASM` and `GUY` blocks (see [`AsmCode`]), by the block's span.
+    pub asm: FxHashMap<Span, AsmCode>,
+    /// The program's code image: the bytes of every block's `BYTE` and `WORD` lines, in order
+    /// (what `LDPI` addresses; labels are offsets in it).
+    pub asm_image: Vec<u8>,
+    /// RETYPES between a channel and an INT (its address, as `ASM` blocks see addresses), by
+    /// the span of the new name.
+    pub chan_retypes: FxHashMap<Span, ChanRetype>,
 }
 
-/// One transputer instruction of an `ASM` block in the subset that runs on this machine: the
-/// evaluation stack (A, B, C) as word values, loaded from constants and INT variables and stored
-/// back to INT variables. `LDAB a, b` and `LDABC a, b, c` are pushes of the operands in reverse
-/// order (so that A holds `a`); `STAB` and `STABC` are stores in order.
+/// A RETYPES between a channel and an INT.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChanRetype {
+    /// `VAL INT x RETYPES c :`: the channel's address as an INT.
+    ToInt,
+    /// `CHAN OF P d RETYPES x :`: the channel whose address is the INT `x`.
+    FromInt,
+}
+
+/// A checked `ASM` or `GUY` block: its instructions and the room they need.
+///
+/// The address model: an address is an INT, the signed byte offset of the memory from the
+/// node's address base (`occ_runtime::abi::ADDR_BASE_OFFSET`); words are 32 bits
+/// (`TARGET.BITS.PER.WORD`), so `LDNL n` reads the word `4n` bytes past A. The numbered
+/// workspace slots of `LDL`/`STL`/`LDLP` are 32-bit words of an area that the enclosing frame
+/// reserves for its blocks (slot 0 at the area's Wptr, `RESERVELOWWS n` reserving n words below
+/// it); `AJW` moves the block's Wptr within that area at compile time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AsmCode {
+    /// The instructions, in order.
+    pub ops: Vec<AsmOp>,
+    /// The span of each instruction's line (for run-time errors).
+    pub spans: Vec<Span>,
+    /// Words of the area the block may use below its Wptr (`RESERVELOWWS`, negative slots).
+    pub low_words: u32,
+    /// Words of the area at and above its Wptr (the highest slot used, plus one).
+    pub high_words: u32,
+}
+
+/// One instruction of an `ASM` or `GUY` block over the evaluation stack (A, B, C).
+/// `LDAB a, b` and `LDABC a, b, c` are pushes of the operands in reverse order (so that A holds
+/// `a`); `STAB` and `STABC` are stores in order.
+#[derive(Debug, Clone, PartialEq)]
 pub enum AsmOp {
-    /// Push a constant (`LDC n`, `LD n`).
+    /// Push a constant (`LDC n`, `LD n`, `LDLABELDIFF :a - :b`).
     Const(i64),
-    /// Push an INT variable's value (`LD x`).
-    Load(SymbolId),
-    /// Store A in an INT variable and pop (`ST x`).
-    Store(SymbolId),
+    /// Push the value of an expression (`LD e`, GUY's `LDL x`): a channel pushes its address.
+    Load(ast::Expr),
+    /// Store A in an element and pop (`ST x`, `STL x`).
+    Store(ast::Expr),
+    /// Push the address of an element, a constant or a table (`LD ADDRESSOF x`, `LDLP x`).
+    Address(ast::Expr),
+    /// Push a number naming a PROC (`LD ADDRESSOF p`): occ's code is not in node memory.
+    ProcAddress(SymbolId),
     /// Pop A (`POP`).
     Pop,
     /// Swap A and B (`REV`).
     Rev,
+    /// A label (`:name`), numbered in the block.
+    Label(usize),
+    /// `J :label`.
+    Jump(usize),
+    /// `CJ :label`: jump if A is 0 (the stack unchanged), otherwise pop A.
+    CondJump(usize),
+    /// `LDPI`: A := the address of the program's code image at byte `.0` plus A.
+    Ldpi(i64),
+    /// `LB`: A := the byte at address A.
+    Lb,
+    /// `ADC n`: A := A + n (overflow is an error).
+    Adc(i64),
+    /// `ADC x` of a variable or other expression: A := A + x (overflow is an error).
+    AdcValue(ast::Expr),
+    /// `LDNL n`: A := the word at A + 4n.
+    Ldnl(i64),
+    /// `STNL n`: the word at A + 4n := B; pop both.
+    Stnl(i64),
+    /// `WSUB`: A := A + 4B, pop B.
+    Wsub,
+    /// `LDL n`: push workspace slot n (after `AJW`s).
+    LoadSlot(i64),
+    /// `STL n`: store A in workspace slot n and pop.
+    StoreSlot(i64),
+    /// `LDLP n`: push the address of workspace slot n.
+    SlotAddress(i64),
+    /// `OUTWORD`: output the word A on the channel whose address is B (a blocking point).
+    Outword,
+    /// `CALL p`: call PROC `sym` with A, B, C as its parameters (after dropping A when it is the
+    /// static link occ21 passes to a PROC; occ passes its own); a blocking point.
+    CallProc {
+        /// The PROC.
+        sym: SymbolId,
+        /// Whether A is a static link to drop.
+        skip_link: bool,
+    },
+    /// `CALL f`: call FUNCTION `sym` with A, B, C as its parameters; its result is left in A.
+    CallFunction(SymbolId),
 }

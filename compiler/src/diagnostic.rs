@@ -182,6 +182,12 @@ pub enum DiagnosticKind {
         /// What it is.
         what: &'static str,
     },
+    /// Occurs when a line of an `ASM` or `GUY` block is not an instruction occ runs. Example:
+    /// `ASM` with the line `FPADD`, or `J :nowhere` with no label `:nowhere`.
+    Asm {
+        /// What is wrong.
+        what: String,
+    },
     /// Occurs when a record has no field of that name. Example: `p[zz]` for a `RECORD` without `zz`.
     NoSuchField {
         /// The field.
@@ -297,6 +303,7 @@ impl DiagnosticKind {
                 format!("RETYPES size mismatch: the new type has {to} bytes, the value {from}")
             }
             Unsupported { what } => format!("{what} is not supported"),
+            Asm { what } => what.clone(),
             NoSuchField { field, record } => format!("record {record} has no field `{field}`"),
             NoSuchTag { tag, protocol } => format!("protocol {protocol} has no tag `{tag}`"),
             OutOfBounds { index, len } => {

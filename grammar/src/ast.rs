@@ -745,6 +745,9 @@ pub struct AsmBlock {
     pub guy: bool,
     /// The indented lines, as written (indentation removed).
     pub lines: Vec<String>,
+    /// Where each line's kept text is (so `lines[i][k]` is at `line_spans[i].start + k`), for
+    /// diagnostics on one line of the block.
+    pub line_spans: Vec<Span>,
 }
 
 /// A process.

@@ -372,7 +372,7 @@ fn continues(token: &Token) -> bool {
 
 /// Collects the lines after `start` indented deeper than `column` (blank lines included), with
 /// that indentation removed; returns them and the offset just after the last one.
-fn asm_body(text: &str, start: usize, column: usize) -> (Vec<String>, usize) {
+fn asm_body(text: &str, start: usize, column: usize) -> (Vec<(usize, String)>, usize) {
     let mut lines = Vec::new();
     let mut at = start;
     while at < text.len() {
@@ -382,10 +382,11 @@ fn asm_body(text: &str, start: usize, column: usize) -> (Vec<String>, usize) {
         if !line.trim().is_empty() && indent <= column {
             break;
         }
-        lines.push(line.get(column + 2..).unwrap_or("").trim_end().to_string());
+        let kept = line.get(column + 2..).unwrap_or("");
+        lines.push((end - kept.len(), kept.trim_end().to_string()));
         at = (end + 1).min(text.len());
     }
-    while lines.last().is_some_and(String::is_empty) {
+    while lines.last().is_some_and(|(_, l)| l.is_empty()) {
         lines.pop();
     }
     let resume = if at >= text.len() { text.len() } else { at - 1 };

@@ -55,7 +55,7 @@ pub enum Token<'a> {
     /// Indentation decreased by one level.
     Dedent,
     /// An opaque ASM/GUY body (made by the layout pass).
-    AsmBody(Vec<String>),
+    AsmBody(Vec<(usize, String)>),
 
     /// A name (`x`, `out.string`).
     #[regex(r"[A-Za-z][A-Za-z0-9._]*", |lex| lex.slice())]

@@ -33,8 +33,17 @@ pub struct Parse {
 /// Parses the preprocessed `text` into a program. The program is returned even when there are
 /// errors (with the erroneous lines skipped); `diagnostics` then holds at least one error.
 pub fn parse(text: &str) -> Parse {
+    parse_shifted(text, 0)
+}
+
+/// [`parse`], with every token's offsets (so every span of the program) `delta` further on.
+fn parse_shifted(text: &str, delta: usize) -> Parse {
     let lexed = crate::layout::lex(text);
-    let (tokens, mut diagnostics) = (lexed.tokens, lexed.diagnostics);
+    let (mut tokens, mut diagnostics) = (lexed.tokens, lexed.diagnostics);
+    for (l, _, r) in &mut tokens {
+        *l += delta;
+        *r += delta;
+    }
     let lexed_all = !lexed.dropped;
     let empty = Program {
         decls: Vec::new(),
@@ -205,5 +214,56 @@ fn describe(token: &Token) -> String {
         Token::Str(_) | Token::UnclosedStr => "string".to_string(),
         Token::AsmBody(_) => "ASM body".to_string(),
         other => format!("`{}`", crate::print::token_text(other)),
+    }
+}
+
+/// Parses one expression written over `lines`, each `(offset, text)` a line of text that starts
+/// a line at `offset` of the program text, so that the expression's spans point into the
+/// program. `ASM` and `GUY` operands need this: their lines reach the checker as raw text. The
+/// expression may continue over the lines as a program's may (inside brackets, after an
+/// operator, a `VALOF`); `Err` holds the syntax diagnostics.
+pub fn parse_expression(lines: &[(usize, &str)]) -> Result<crate::ast::Expr, Vec<Diagnostic>> {
+    const HEAD: &str = "VAL asm IS";
+    let first = lines.first().map_or(0, |l| l.0);
+    let end = lines.last().map_or(0, |(at, l)| at + l.len());
+    let span = Span::new(first, end);
+    let ordered = lines.windows(2).all(|w| w[0].0 + w[0].1.len() < w[1].0);
+    if first <= HEAD.len() + 1 || !ordered {
+        return Err(vec![Diagnostic::error(
+            span,
+            "an operand is not valid text",
+            "here",
+        )]);
+    }
+    // `VAL asm IS <operand> :`, each line of the operand `delta` bytes before its own offset
+    // and the gaps between them blank; the tokens are moved on by `delta`, so that the
+    // expression's spans are those of the program.
+    let delta = first - (HEAD.len() + 1);
+    let mut wrapped = String::with_capacity(end - delta + 3);
+    wrapped.push_str(HEAD);
+    for (at, line) in lines {
+        while wrapped.len() + 1 < at - delta {
+            wrapped.push(' ');
+        }
+        wrapped.push('\n');
+        wrapped.push_str(line);
+    }
+    wrapped.push_str(" :\n");
+    let parsed = parse_shifted(&wrapped, delta);
+    let errors: Vec<Diagnostic> = parsed
+        .diagnostics
+        .into_iter()
+        .filter(|d| d.severity == crate::diagnostic::Severity::Error)
+        .collect();
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    match parsed.program.decls.into_iter().next().map(|d| d.kind) {
+        Some(crate::ast::DeclKind::Abbrev { value, .. }) => Ok(value),
+        _ => Err(vec![Diagnostic::error(
+            span,
+            "I was expecting an expression",
+            "here",
+        )]),
     }
 }

@@ -380,3 +380,33 @@ fn valof_block_opening_on_the_line_of_its_parenthesis() {
     };
     assert_eq!(v.decls.len(), 1);
 }
+
+/// An ASM block keeps its lines and where each is; `parse_expression` reads an operand written
+/// over several of them (a VALOF inside a subscript) with spans into the program text.
+#[test]
+fn asm_operand_over_lines_parses_with_its_spans() {
+    let text = "PROC p ()\n  ASM\n    ST ar[(INT r :\n           VALOF\n             r := 1\n             RESULT r\n          )]\n:\n";
+    let program = parse_ok(text);
+    let ProcessKind::Asm(block) = &body_of(&program).kind else {
+        panic!("not an ASM block");
+    };
+    assert_eq!(block.lines.len(), 5);
+    let operand = |i: usize| {
+        let s = block.line_spans[i];
+        (s.start, &text[s.start..s.end])
+    };
+    let (first_at, first) = operand(0);
+    assert_eq!(first, "ST ar[(INT r :");
+    // The operand starts after `ST `: its line is given from the kept column, blanked.
+    let mut lines = vec![(first_at, format!("   {}", &first[3..]))];
+    lines.extend((1..5).map(|i| (operand(i).0, operand(i).1.to_string())));
+    let refs: Vec<(usize, &str)> = lines.iter().map(|(a, s)| (*a, s.as_str())).collect();
+    let e = occ_grammar::parser::parse_expression(&refs).expect("the operand parses");
+    assert!(matches!(e.kind, ExprKind::Subscript { .. }));
+    assert_eq!(
+        &text[e.span.start..e.span.end].lines().next(),
+        &Some("ar[(INT r :")
+    );
+    let bad = occ_grammar::parser::parse_expression(&[(first_at, "   x +)")]);
+    assert!(bad.is_err());
+}

@@ -148,6 +148,22 @@ pub const fn word_offset(w: isize) -> i32 {
 /// Byte offset, from the `node` pointer, of the `u32` timeslice/preemption flag.
 pub const YIELD_FLAG_OFFSET: i32 = 0;
 
+/// Byte offset, from the `node` pointer, of the node's address base (a word): the start of its
+/// first workspace chunk. `ASM` blocks see an address as a 32-bit INT, its signed byte offset
+/// from this base, so an address stored in an INT and loaded back still works; converting a
+/// pointer more than 2 GB from the base is the run-time error
+/// [`ErrorKind::AddressRange`](crate::ErrorKind::AddressRange).
+pub const ADDR_BASE_OFFSET: i32 =
+    (std::mem::offset_of!(Node, arena) + std::mem::offset_of!(crate::arena::Arena, base)) as i32;
+
+/// Byte offset, from the `node` pointer, of two words: the lowest and one past the highest
+/// offset from the address base that is node memory (its workspace chunks). Compiled `ASM`
+/// code checks every address it reads or writes through against them, so a wild address is
+/// the run-time error [`ErrorKind::AddressRange`](crate::ErrorKind::AddressRange), never an
+/// access outside the node's memory.
+pub const ADDR_LIMITS_OFFSET: i32 =
+    (std::mem::offset_of!(Node, arena) + std::mem::offset_of!(crate::arena::Arena, limits)) as i32;
+
 /// Byte offsets into the node that compiled code's inline channel fast path reads and writes
 /// (see `rt_preempt`): the running priority (a word), the two run queues (`[front, back]` word
 /// pairs, high priority first) and the communications counter (a `u64`).

@@ -8,6 +8,10 @@ use std::collections::HashMap;
 use crate::abi::{Word, Wptr, slot};
 use crate::error::RunError;
 
+/// The offset from the address base of the first chunk: INT addresses below it are never
+/// node memory.
+const ADDR_GUARD: Word = 1 << 16;
+
 /// Words per chunk requested from the system (8 MB).
 const CHUNK_WORDS: usize = 1 << 20;
 
@@ -15,6 +19,13 @@ const CHUNK_WORDS: usize = 1 << 20;
 #[derive(Debug)]
 pub(crate) struct Arena {
     chunks: Vec<Box<[Word]>>,
+    /// [`ADDR_GUARD`] bytes before the first chunk's first word (0 until it exists): the base
+    /// that `ASM` blocks' 32-bit addresses are offsets from (see
+    /// [`crate::abi::ADDR_BASE_OFFSET`]).
+    pub(crate) base: Word,
+    /// The byte offsets from `base` of the lowest and one past the highest chunk byte: the
+    /// range an `ASM` address must fall in (see [`crate::abi::ADDR_LIMITS_OFFSET`]).
+    pub(crate) limits: [Word; 2],
     /// Next free word in the last chunk.
     used: usize,
     free: HashMap<usize, Vec<Wptr>>,
@@ -27,6 +38,8 @@ impl Arena {
     pub(crate) fn new(budget: usize) -> Arena {
         Arena {
             chunks: Vec::new(),
+            base: 0,
+            limits: [0, 0],
             used: 0,
             free: HashMap::new(),
             budget,
@@ -65,6 +78,19 @@ impl Arena {
             self.chunks
                 .push(vec![0; CHUNK_WORDS.max(total)].into_boxed_slice());
             self.used = 0;
+            let chunk = self.chunks.last().expect("a chunk was just pushed");
+            let start = chunk.as_ptr() as Word;
+            if self.base == 0 {
+                // Small numbers are never addresses: an INT used by mistake as one is an
+                // error, not a write to the first frames.
+                self.base = start - ADDR_GUARD;
+                self.limits = [ADDR_GUARD, ADDR_GUARD];
+            }
+            let end = start - self.base + (chunk.len() * size_of::<Word>()) as Word;
+            self.limits = [
+                self.limits[0].min(start - self.base),
+                self.limits[1].max(end),
+            ];
         }
         let chunk = self.chunks.last_mut().expect("a chunk was just ensured");
         let base = chunk[self.used..].as_mut_ptr();
@@ -86,5 +112,34 @@ impl Arena {
     /// High-water mark of allocated bytes.
     pub(crate) fn peak_bytes(&self) -> u64 {
         self.peak as u64
+    }
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+
+    /// Every workspace is node memory as `ASM` addresses see it: at or past the guard, inside
+    /// the limits, however many chunks there are.
+    #[test]
+    fn workspaces_fall_inside_the_address_limits() {
+        let mut arena = Arena::new(64 << 20);
+        assert_eq!(arena.base, 0, "no base before the first chunk");
+        let mut spans = Vec::new();
+        for words in [10, CHUNK_WORDS - 100, 50, CHUNK_WORDS] {
+            let ws = arena.alloc(words).expect("within the budget") as Word;
+            spans.push((ws, words));
+        }
+        assert!(arena.chunks.len() >= 2, "the test spans chunks");
+        for (ws, words) in spans {
+            let off = ws - arena.base;
+            let end = off + (words * size_of::<Word>()) as Word;
+            assert!(
+                off >= arena.limits[0] && end <= arena.limits[1],
+                "{off}..{end}"
+            );
+        }
+        let first = arena.chunks[0].as_ptr() as Word;
+        assert_eq!(first - arena.base, ADDR_GUARD);
     }
 }

@@ -48,13 +48,17 @@ pub enum ErrorKind {
     Floating = 13,
     /// Occurs when a replicator's count is negative.
     ReplicatorCount = 14,
+    /// Occurs when an `ASM` block takes the address of memory more than 2 GB from the node's
+    /// address base, which an INT (32 bits) cannot hold (see [`crate::abi::ADDR_BASE_OFFSET`]),
+    /// or reads or writes through an address outside the node's memory.
+    AddressRange = 15,
 }
 
 impl ErrorKind {
     /// The kind with code `code`.
     pub fn from_code(code: Word) -> Option<ErrorKind> {
         use ErrorKind::*;
-        const ALL: [ErrorKind; 15] = [
+        const ALL: [ErrorKind; 16] = [
             Stop,
             IfNoBranch,
             CaseNoMatch,
@@ -70,6 +74,7 @@ impl ErrorKind {
             Stopped,
             Floating,
             ReplicatorCount,
+            AddressRange,
         ];
         usize::try_from(code).ok().and_then(|i| ALL.get(i).copied())
     }
@@ -94,6 +99,7 @@ impl ErrorKind {
             ErrorKind::Stopped => "stopped because another node of the network failed",
             ErrorKind::Floating => "floating-point error: REAL division by zero",
             ErrorKind::ReplicatorCount => "negative replicator count",
+            ErrorKind::AddressRange => "ASM address out of range: outside the node's memory",
         }
     }
 }

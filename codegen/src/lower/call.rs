@@ -167,7 +167,7 @@ impl Tr<'_, '_> {
     }
 
     /// Fills in a callee frame's header: CODE, IPTR = 0, CALLER = ws, ROOT = ws[ROOT].
-    fn enter_frame(&mut self, cw: Value, id: cranelift_module::FuncId) {
+    pub(super) fn enter_frame(&mut self, cw: Value, id: cranelift_module::FuncId) {
         let f = self.func_ref(id);
         let code = self.b.ins().func_addr(types::I64, f);
         self.store_slot_at(cw, slot::CODE, code);
@@ -233,16 +233,9 @@ impl Tr<'_, '_> {
 
     /// Expands the FUNCTION declared by `d` inline with the actuals `args`.
     fn expand_function(&mut self, d: &Decl, args: &[&Expr], span: Span) -> Res<Vec<Value>> {
-        let DeclKind::Function { params, body, .. } = &d.kind else {
+        let DeclKind::Function { params, .. } = &d.kind else {
             return Err(self.cx.internal(span, "not a FUNCTION"));
         };
-        let result_exprs = match body {
-            FunctionBody::Is(es) => &es[..],
-            FunctionBody::Valof(v) => &v.results[..],
-        };
-        let slots = self.result_slots(result_exprs)?;
-        let mark = self.frame.mark();
-        // Bind the formals to the actuals.
         let mut binds = Vec::new();
         for (p, a) in params.iter().zip(args) {
             let psym = self.cx.symbol(&p.name)?;
@@ -253,6 +246,44 @@ impl Tr<'_, '_> {
                 binds.push((psym, Some(self.place(a)?), None));
             }
         }
+        self.expand_bound(d, binds, span)
+    }
+
+    /// Expands the FUNCTION declared by `d` inline with scalar actuals already evaluated
+    /// (an `ASM` block's `CALL`).
+    pub(super) fn expand_function_values(
+        &mut self,
+        d: &Decl,
+        values: &[Value],
+        span: Span,
+    ) -> Res<Vec<Value>> {
+        let DeclKind::Function { params, .. } = &d.kind else {
+            return Err(self.cx.internal(span, "not a FUNCTION"));
+        };
+        let mut binds = Vec::new();
+        for (p, v) in params.iter().zip(values) {
+            binds.push((self.cx.symbol(&p.name)?, None, Some(*v)));
+        }
+        self.expand_bound(d, binds, span)
+    }
+
+    /// Expands FUNCTION `d` with its formals bound: references to places, values to frame
+    /// words.
+    fn expand_bound(
+        &mut self,
+        d: &Decl,
+        binds: Vec<(SymbolId, Option<super::Loc>, Option<Value>)>,
+        span: Span,
+    ) -> Res<Vec<Value>> {
+        let DeclKind::Function { body, .. } = &d.kind else {
+            return Err(self.cx.internal(span, "not a FUNCTION"));
+        };
+        let result_exprs = match body {
+            FunctionBody::Is(es) => &es[..],
+            FunctionBody::Valof(v) => &v.results[..],
+        };
+        let slots = self.result_slots(result_exprs)?;
+        let mark = self.frame.mark();
         for (psym, l, v) in binds {
             match (l, v) {
                 (Some(l), _) => self.bind_ref(psym, &l),

@@ -62,6 +62,9 @@ impl Tr<'_, '_> {
                     &self.cx.checked.types,
                     &self.cx.checked.symbols[sym].ty,
                 );
+                if let Some(kind) = self.cx.checked.chan_retypes.get(&name.span).copied() {
+                    return self.chan_retype(sym, ty, kind, value);
+                }
                 let src = self.place(value)?;
                 let size = self.loc_size(&src, value.span)?;
                 self.retype(sym, ty, written, src.addr, size)
@@ -140,6 +143,39 @@ impl Tr<'_, '_> {
         Ok(())
     }
 
+    /// A RETYPES between a channel and an INT: the channel's address as an INT (a frame word),
+    /// or the channel at the address an INT holds (see `asm.rs` for the address model).
+    fn chan_retype(
+        &mut self,
+        sym: occ_compiler::checked::SymbolId,
+        ty: Type,
+        kind: occ_compiler::checked::ChanRetype,
+        value: &occ_grammar::ast::Expr,
+    ) -> Res<()> {
+        match kind {
+            occ_compiler::checked::ChanRetype::ToInt => {
+                let c = self.place(value)?.addr;
+                let v = self.int_address(c, value.span);
+                let v = self.b.ins().ireduce(types::I32, v);
+                let off = self.frame.alloc_word();
+                let a = self.local_addr(off);
+                self.store_scalar(v, a);
+                self.bind(sym, off, false);
+            }
+            occ_compiler::checked::ChanRetype::FromInt => {
+                let v = self.expr(value)?;
+                let addr = self.int_pointer(v, 0, crate::layout::WORD, value.span);
+                let l = Loc {
+                    addr,
+                    ty,
+                    dims: Vec::new(),
+                };
+                self.bind_ref(sym, &l);
+            }
+        }
+        Ok(())
+    }
+
     fn alloc_var(&mut self, ty: &Type, name: &Name) -> Res<i32> {
         let size = size_of(&self.cx.checked.types, ty).ok_or_else(|| {
             self.cx
@@ -201,6 +237,20 @@ impl Tr<'_, '_> {
 
     /// Binds `sym` to a table of the addresses of the channels `items`.
     fn chan_table(&mut self, sym: occ_compiler::checked::SymbolId, items: &[Expr]) -> Res<()> {
+        if self.consecutive_channels(items) {
+            // `[a[0], a[1], a[2]]` is the segment `[a FROM 0 FOR 3]`: bound as that segment,
+            // it can be passed whole as an array of channels.
+            let first = self.place(&items[0])?;
+            let ty = Type::Array(Some(items.len() as u32), Box::new(first.ty));
+            let n = self.iconst(items.len() as i64);
+            let l = Loc {
+                addr: first.addr,
+                ty,
+                dims: vec![n],
+            };
+            self.bind_ref(sym, &l);
+            return Ok(());
+        }
         let off = self.frame.alloc_words(items.len());
         for (k, item) in items.iter().enumerate() {
             let l = self.place(item)?;
@@ -216,6 +266,35 @@ impl Tr<'_, '_> {
         };
         self.cx.env.insert(sym, st);
         Ok(())
+    }
+
+    /// Whether `items` are `a[k]`, `a[k + 1]`, ... of one array `a` of channels, with constant
+    /// subscripts.
+    fn consecutive_channels(&self, items: &[Expr]) -> bool {
+        let mut prev: Option<(occ_compiler::checked::SymbolId, i64)> = None;
+        for item in items {
+            let ExprKind::Subscript { base, index } = &item.kind else {
+                return false;
+            };
+            let ExprKind::Name(n) = &base.kind else {
+                return false;
+            };
+            let (Ok(sym), Some(k)) = (
+                self.cx.symbol(n),
+                self.cx
+                    .checked
+                    .constants
+                    .get(&index.span)
+                    .and_then(|c| c.as_int()),
+            ) else {
+                return false;
+            };
+            if prev.is_some_and(|(s, j)| s != sym || j + 1 != k) {
+                return false;
+            }
+            prev = Some((sym, k));
+        }
+        prev.is_some()
     }
 
     /// Binds `sym` by reference to place `l` (address and dimension lengths in the frame).

@@ -9,6 +9,7 @@
 //! blocking points.
 
 mod alt;
+mod asm;
 mod bits;
 mod call;
 mod construct;
@@ -283,7 +284,9 @@ impl<'p> Compiler<'p> {
                 no_poll: 0,
                 held: None,
                 channels: Vec::new(),
+                asm_area: None,
             };
+            tr.reserve_asm_area(span);
             let r = body(&mut tr);
             r.map(|()| tr.finish(dispatch))
         };
@@ -333,6 +336,9 @@ pub struct Tr<'a, 'p> {
     /// While lowering the input of an extended rendezvous (`c ?? x`): the frame offset of the
     /// word that holds the outputter not yet released (see [`Entry::Xin`]).
     pub held: Option<i32>,
+    /// The workspace area of the function's `ASM` blocks: the byte offset of their Wptr and
+    /// the 32-bit words reserved below and above it.
+    pub asm_area: Option<(i32, u32, u32)>,
 }
 
 /// Memory flags for workspace data (not necessarily aligned).

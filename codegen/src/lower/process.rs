@@ -3,7 +3,6 @@
 
 use cranelift_codegen::ir::{Block, InstBuilder, Value, condcodes::IntCC, types};
 use cranelift_frontend::Switch;
-use occ_compiler::checked::{AsmOp, SymbolId, SymbolKind};
 use occ_compiler::types::Type;
 use occ_grammar::ast::{
     CaseOption, Choice, ChoiceKind, Expr, ExprKind, Process, ProcessKind, Replicator, Span,
@@ -79,74 +78,10 @@ impl Tr<'_, '_> {
                 Err(self.cx.unsupported(p.span, "PLACED PAR / PROCESSOR"))
             }
             ProcessKind::Asm(_) => match self.cx.checked.asm.get(&p.span).cloned() {
-                Some(ops) => self.asm(&ops, p.span),
-                None => Err(self.cx.unsupported(
-                    p.span,
-                    "ASM / GUY blocks beyond LDC, LD, LDAB, LDABC, ST, STAB, STABC, POP and REV \
-                     on INT variables and constants",
-                )),
+                Some(code) => self.asm(&code, p.span),
+                None => Err(self.cx.internal(p.span, "an ASM block was not checked")),
             },
         }
-    }
-
-    /// An `ASM` block in the subset that runs here: the evaluation stack (A first) as values.
-    /// A pop of an empty stack gives 0, and a push onto a full one loses C, as on the transputer.
-    fn asm(&mut self, ops: &[AsmOp], span: Span) -> Res<()> {
-        let mut stack: Vec<Value> = Vec::new();
-        for op in ops {
-            match *op {
-                AsmOp::Const(n) => {
-                    let v = self.b.ins().iconst(types::I32, n);
-                    stack.insert(0, v);
-                }
-                AsmOp::Load(sym) => {
-                    let v = self.asm_word(sym, span)?;
-                    stack.insert(0, v);
-                }
-                AsmOp::Store(sym) => {
-                    let v = match stack.is_empty() {
-                        true => self.b.ins().iconst(types::I32, 0),
-                        false => stack.remove(0),
-                    };
-                    let l = self.asm_loc(sym, span)?;
-                    self.store_scalar(v, l.addr);
-                }
-                AsmOp::Pop => {
-                    if !stack.is_empty() {
-                        stack.remove(0);
-                    }
-                }
-                AsmOp::Rev => {
-                    while stack.len() < 2 {
-                        let z = self.b.ins().iconst(types::I32, 0);
-                        stack.push(z);
-                    }
-                    stack.swap(0, 1);
-                }
-            }
-            stack.truncate(3);
-        }
-        Ok(())
-    }
-
-    /// The value of an INT operand of an `ASM` block: a constant or a variable's word.
-    fn asm_word(&mut self, sym: SymbolId, span: Span) -> Res<Value> {
-        if let SymbolKind::Val { value: Some(c) } = &self.cx.checked.symbols[sym].kind
-            && let Some(n) = c.as_int()
-        {
-            return Ok(self.b.ins().iconst(types::I32, n));
-        }
-        let l = self.asm_loc(sym, span)?;
-        self.load_scalar(&l.ty, l.addr, span)
-    }
-
-    fn asm_loc(&mut self, sym: SymbolId, span: Span) -> Res<super::place::Loc> {
-        let ty = self.cx.checked.symbols[sym].ty.clone();
-        let st = self.cx.env.get(&sym).cloned().ok_or_else(|| {
-            self.cx
-                .internal(span, "an ASM operand has no storage".to_string())
-        })?;
-        self.storage_loc(&st, ty, span)
     }
 
     /// Runs `body` for each value of replicator `r` (base FOR count [STEP s]), with a timeslice

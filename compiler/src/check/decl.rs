@@ -3,7 +3,7 @@
 use occ_grammar::ast::{self, AbbrevMode, DeclKind, ParamMode, Span};
 
 use super::Checker;
-use crate::checked::{ProcInfo, SymbolId, SymbolKind};
+use crate::checked::{ChanRetype, ProcInfo, SymbolId, SymbolKind};
 use crate::diagnostic::DiagnosticKind;
 use crate::types::{
     ChanProtocol, Direction, Prim, Protocol, ProtocolItem, ProtocolKind, Tag, Type, TypeDef,
@@ -295,9 +295,14 @@ impl Checker {
         self.dynamic_sizes = true;
         let to = self.ty(ty);
         self.dynamic_sizes = false;
+        if self.chan_int_retype(&to, name, value) {
+            return;
+        }
         // A channel is not a value: `VAL CHAN OF p c RETYPES d` names channel `d` under another
         // protocol, as the non-VAL form does (occ21 accepts both).
-        let channel = super::place::is_element(value) && self.names_channel(value);
+        let channel = root_type(self, value).is_some_and(|r| {
+            matches!(self.out.types.underlying(elem_of(&r)), Type::Chan(..))
+        });
         let (from, target, assignable) = if (val && !channel) || !super::place::is_element(value) {
             let t = self.expr(value, None);
             (t.ty, None, false)
@@ -330,28 +335,35 @@ impl Checker {
         }
     }
 
-    /// Whether element `e`'s root name is a channel or an array of channels (before checking it).
-    fn names_channel(&self, e: &ast::Expr) -> bool {
-        let mut root = e;
-        loop {
-            match &root.kind {
-                ast::ExprKind::Subscript { base, .. } | ast::ExprKind::Slice { base, .. } => {
-                    root = base
-                }
-                ast::ExprKind::Directed { chan, .. } => root = chan,
-                _ => break,
-            }
-        }
-        let ast::ExprKind::Name(name) = &root.kind else {
-            return false;
+    /// A RETYPES of a channel to an INT or of an INT to a channel (addresses as `ASM` blocks
+    /// see them, as occ21 allowed): declares `name` and reports whether it was one.
+    fn chan_int_retype(&mut self, to: &Type, name: &ast::Name, value: &ast::Expr) -> bool {
+        let int =
+            |c: &Checker, t: &Type| matches!(c.out.types.underlying(t), Type::Prim(Prim::Int));
+        let chan = |c: &Checker, t: &Type| matches!(c.out.types.underlying(t), Type::Chan(..));
+        let root = root_type(self, value);
+        let kind = match root {
+            Some(r) if int(self, to) && chan(self, elem_of(&r)) => ChanRetype::ToInt,
+            Some(r) if chan(self, to) && int(self, &r) => ChanRetype::FromInt,
+            _ => return false,
         };
-        self.scope.lookup(&name.text).is_some_and(|id| {
-            let mut ty = &self.sym(id).ty;
-            while let Type::Array(_, e) = ty {
-                ty = e;
-            }
-            matches!(self.out.types.underlying(ty), Type::Chan(..))
-        })
+        let p = self.place(value, None);
+        if kind == ChanRetype::FromInt
+            && let Some(t) = &p.target
+        {
+            self.record(t.symbol, Mode::Read, t.part, t.span);
+        }
+        let sym_kind = match kind {
+            ChanRetype::ToInt => SymbolKind::Val { value: None },
+            ChanRetype::FromInt => SymbolKind::Abbrev {
+                mode: AbbrevMode::Ref,
+            },
+        };
+        self.declare(name, sym_kind, to.clone(), false);
+        if self.shadow == 0 {
+            self.out.chan_retypes.insert(name.span, kind);
+        }
+        true
     }
 
     fn retype_sizes(&mut self, to: &Type, from: &Type, span: ast::Span) {
@@ -690,5 +702,22 @@ pub(super) fn kind_name(kind: &SymbolKind) -> &'static str {
         SymbolKind::Predefined(p) if p.is_proc() => "a predefined PROC",
         SymbolKind::Predefined(_) => "a predefined FUNCTION",
         SymbolKind::External(_) => "an EXTERNAL routine",
+    }
+}
+
+/// The declared type of the name an element starts from (`c` of `c[i][j]`).
+fn root_type(c: &Checker, e: &ast::Expr) -> Option<Type> {
+    match &e.kind {
+        ast::ExprKind::Name(n) => c.scope.lookup(&n.text).map(|id| c.sym(id).ty.clone()),
+        ast::ExprKind::Subscript { base, .. } => root_type(c, base),
+        _ => None,
+    }
+}
+
+/// The innermost element type of an array type.
+fn elem_of(t: &Type) -> &Type {
+    match t {
+        Type::Array(_, e) => elem_of(e),
+        t => t,
     }
 }

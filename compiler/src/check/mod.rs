@@ -71,6 +71,9 @@ pub(crate) struct Checker {
     dynamic_sizes: bool,
     /// Above zero while folding a FUNCTION call: expression tables are not written.
     shadow: u32,
+    /// The labels of the `ASM` blocks checked so far, with their offsets in the program's code
+    /// image (`LDLABELDIFF` may name a label of an earlier block).
+    asm_labels: Vec<(String, usize)>,
     /// Replicators with a constant count and step whose base is a linear form (not a constant).
     repl_forms: crate::fxhash::FxHashMap<SymbolId, (crate::usage::Lin, i64, i64)>,
     /// Inside the right operand of `FALSE AND ...` / `TRUE OR ...`, which is never evaluated:
@@ -174,6 +177,7 @@ impl Checker {
             dynamic_sizes: false,
             param_names: Vec::new(),
             shadow: 0,
+            asm_labels: Vec::new(),
             repl_forms: Default::default(),
             dead: 0,
             conditions: Vec::new(),

@@ -219,6 +219,17 @@ snapshot!(snapshot_par_usage, "PROC p ()\n  INT x, y:\n  PAR\n    x := 1\n    y 
 snapshot!(snapshot_par_channel, "PROC p (CHAN OF INT c)\n  INT x, y:\n  PAR\n    c ? x\n    c ? y\n:");
 snapshot!(snapshot_constant_overflow, "VAL INT16 x IS 32767(INT16) + 1(INT16):");
 snapshot!(snapshot_needs_rounding, "PROC p (VAL REAL32 r)\n  INT x:\n  x := INT r\n:");
+snapshot!(snapshot_asm_label, "PROC p (INT x)\n  ASM\n    LD x\n    CJ :nowhere\n:");
+
+// ASM and GUY blocks: operands are checked where they are written.
+accepts!(asm_block, "PROC p (INT x)\n  [4]INT a:\n  ASM\n    LDAB ADDRESSOF a, x\n    STNL 1\n    :l\n    LDC 0\n    CJ :l\n:");
+accepts!(guy_block, "PROC p (INT x)\n  INT y:\n  GUY\n    LDLP x\n    LDNL 0\n    STL y\n:");
+rejects!(asm_operand_type, "PROC p (INT x)\n  ASM\n    LD x\n    ST x +\n      1\n:", 4, "ST needs a variable");
+rejects!(asm_operand_names_are_checked, "PROC p (INT x)\n  ASM\n    LDAB x,\n      y\n:", 4, "`y` is not declared");
+rejects!(asm_store_to_constant, "VAL INT k IS 3:\nPROC p ()\n  ASM\n    LDC 1\n    ST k\n:", 5, "cannot be assigned");
+rejects!(asm_jump_to_another_block, "PROC p ()\n  SEQ\n    ASM\n      :a\n    ASM\n      J :a\n:", 6, "not defined in this block");
+rejects!(asm_unknown_instruction, "PROC p ()\n  GUY\n    FMUL\n:", 3, "`FMUL` is not a transputer instruction");
+accepts!(channel_retypes_to_int_and_back, "PROC p (CHAN OF INT c)\n  VAL INT x RETYPES c:\n  CHAN OF INT d RETYPES x:\n  d ! 1\n:");
 
 // #PRAGMA EXTERNAL routines.
 accepts!(external_proc_call, "#PRAGMA EXTERNAL \"PROC X.FILL (VAL []REAL32 a, []REAL32 out, RESULT INT n) = 0\"\nPROC p ()\n  [3]REAL32 a, b:\n  INT n:\n  X.FILL (a, b, n)\n:");

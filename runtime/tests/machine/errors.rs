@@ -43,7 +43,7 @@ fn runtime_error_names_file_line_kind_and_proc() {
 
 #[test]
 fn every_error_kind_has_a_code_and_message() {
-    for code in 0..15 {
+    for code in 0..16 {
         let k = ErrorKind::from_code(code).expect("kind");
         assert_eq!(k as Word, code);
         assert!(!k.describe().is_empty());
@@ -61,13 +61,15 @@ fn every_error_kind_has_a_code_and_message() {
         (ErrorKind::Assert, "assert"),
         (ErrorKind::Floating, "floating-point"),
         (ErrorKind::ReplicatorCount, "replicator count"),
+        (ErrorKind::AddressRange, "address out of range"),
     ] {
         assert!(k.describe().to_lowercase().contains(word), "{k:?}");
     }
     assert_eq!(ErrorKind::from_code(12), Some(ErrorKind::Stopped));
     assert_eq!(ErrorKind::from_code(13), Some(ErrorKind::Floating));
     assert_eq!(ErrorKind::from_code(14), Some(ErrorKind::ReplicatorCount));
-    assert_eq!(ErrorKind::from_code(15), None);
+    assert_eq!(ErrorKind::from_code(15), Some(ErrorKind::AddressRange));
+    assert_eq!(ErrorKind::from_code(16), None);
     assert_eq!(ErrorKind::from_code(-1), None);
 }
 
