@@ -8,15 +8,15 @@
 //!
 //! Meshing pipeline ([`Mesh::from_scene`]); each step runs once and is bounded by its output:
 //! 1. weld corners by position, drop collapsed and duplicate triangles, count degenerate input
-//!    ([`input`]);
+//!    (`input`);
 //! 2. D0 discontinuities: each triangle is cut once, into convex pieces, along the segments
 //!    where faces of other planes cross or touch it and along the outlines of parallel faces
-//!    close in front of it, which hide what they cover ([`cuts`], [`piece`]);
+//!    close in front of it, which hide what they cover (`cuts`, `piece`);
 //! 3. the pieces' points are welded by position and normal, each piece edge takes the points of
 //!    its surface lying on it (T-junctions, found once, never split again), and the pieces are
 //!    triangulated;
 //! 4. regions enclosed by contact are hidden and sample points on discontinuities are split,
-//!    one per side ([`surface`]);
+//!    one per side (`surface`);
 //! 5. patches: longest-edge bisection until every edge is at most `patch_size`;
 //! 6. elements: further bisection to at most `element_size`; each element remembers its patch.
 //!

@@ -7,7 +7,7 @@
 //! keyboard process). At end of input the keyboard delivers byte 255 ([`END_OF_INPUT`]), and
 //! again on every later read. Output is flushed when the node stops, in every case.
 //!
-//! When the input is a terminal, it is read on a thread of its own instead ([`crate::keyboard`]),
+//! When the input is a terminal, it is read on a thread of its own instead (the `keyboard` module),
 //! so that a process waiting for a key blocks only itself.
 //!
 //! When the screen is a terminal ([`HostIo::stdio`] asks), it is also flushed at each newline, as

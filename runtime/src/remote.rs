@@ -116,8 +116,8 @@ impl Network {
     }
 }
 
-/// Carries a network's links between processes (MPI ranks): see [`crate::mpi::Mpi`] with the
-/// `mpi` feature.
+/// Carries a network's links between processes (MPI ranks): see `mpi::Mpi` with the `mpi`
+/// feature.
 pub trait Transport {
     /// This process's rank and the number of ranks.
     fn spread(&self) -> Spread;

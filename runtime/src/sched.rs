@@ -292,7 +292,7 @@ impl Node {
 ///
 /// Resets the flag. At high priority: `DONE` (high processes are never timesliced). At low
 /// priority: preempted into the interrupted slot if a high process is ready; when a thread pool
-/// runs the node and it has had its turn ([`crate::pool::TURN_SLICES`] timeslices), put at the
+/// runs the node and it has had its turn (`pool::TURN_SLICES` timeslices), put at the
 /// back of the low queue with the node giving way; put at the back of the low queue if anything
 /// else could run; otherwise `DONE`. When timeslicing by count, only every
 /// [`crate::NodeConfig::counted_slices`]-th call is a timeslice (the others only check for a

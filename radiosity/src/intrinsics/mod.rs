@@ -324,7 +324,7 @@ pub unsafe extern "C" fn point_polygon_ff(
 
 /// `PROC RAD.SOURCE.SAMPLES (VAL []REAL32 tri, VAL INT m, VAL INT seed, []REAL32 out,
 /// RESULT INT count)`: the stratified sample points of the source triangle `tri` (9 floats) for
-/// `m` rays, as the solver takes them ([`source_samples`]: a jittered k × k grid, k = ⌈√m⌉,
+/// `m` rays, as the solver takes them ([`crate::formfactor::source_samples`]: a jittered k × k grid, k = ⌈√m⌉,
 /// warped onto the triangle, from the generator seeded with `seed`). Writes `count` = k² points
 /// (3k² floats) to the start of `out`; `count` is -1 and `out` untouched when `tri` is not 9
 /// floats, `m` is not in 1..=65536, or `out` is shorter than 3k² floats.

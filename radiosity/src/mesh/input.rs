@@ -38,7 +38,7 @@ pub struct InputCounts {
     /// Edges where two triangles of one object meet with inconsistent orientations (one of
     /// them faces the other way: a flipped normal), as found in the input.
     pub flipped_edges: usize,
-    /// Triangles turned over to face the way their connected surface does (see [`reorient`]).
+    /// Triangles turned over to face the way their connected surface does (see `reorient`).
     pub reoriented: usize,
 }
 

@@ -152,7 +152,7 @@ impl FlatOctree {
 }
 
 impl Octree {
-    /// The flat form of the tree (see [`flat`](self::flat)); voxels are numbered in node order.
+    /// The flat form of the tree (see [`crate::octree::flat`]); voxels are numbered in node order.
     pub fn flat(&self) -> Result<FlatOctree, FlatError> {
         let nodes = self.nodes.len();
         if nodes > MAX_NODES {
