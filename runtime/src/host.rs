@@ -13,6 +13,11 @@
 //! When the screen is a terminal ([`HostIo::stdio`] asks), it is also flushed at each newline, as
 //! KRoC's screen is, so a program that prints a line now and then is seen as it runs; output to a
 //! file or pipe stays fully buffered, which keeps bulk output fast.
+//!
+//! When the input is a terminal ([`HostIo::stdio`] asks), the first keyboard input puts it in
+//! raw mode, as KRoC does: each key reaches the program as it is pressed, without the terminal's
+//! echo. The terminal is put back when the host streams are dropped (the program has ended) or a
+//! signal stops the process.
 
 use std::io::{BufWriter, IsTerminal, Read, Write};
 
@@ -47,6 +52,10 @@ pub struct HostIo {
     keyboard_thread: bool,
     /// That thread, once the first input has started it.
     keyboard: Option<Keyboard>,
+    /// Put a terminal input in raw mode at the first input.
+    raw_terminal: bool,
+    /// Raw mode, while it is on.
+    raw: Option<crate::terminal::RawMode>,
 }
 
 impl std::fmt::Debug for HostIo {
@@ -70,6 +79,24 @@ impl HostIo {
             binary: false,
             keyboard_thread: false,
             keyboard: None,
+            raw_terminal: false,
+            raw: None,
+        }
+    }
+
+    /// Puts the process's standard input, a terminal, in raw mode at the first keyboard input
+    /// (`true`), as KRoC's keyboard does; the input must be standard input.
+    pub fn raw_terminal(mut self, on: bool) -> HostIo {
+        self.raw_terminal = on;
+        self
+    }
+
+    /// Raw mode on, if asked for and not yet on.
+    fn enter_raw(&mut self) {
+        if self.raw_terminal && self.raw.is_none() {
+            self.raw = crate::terminal::RawMode::enter();
+            // Tried once: a terminal that refuses stays as it is.
+            self.raw_terminal = false;
         }
     }
 
@@ -87,6 +114,7 @@ impl HostIo {
         if !self.keyboard_thread {
             return None;
         }
+        self.enter_raw();
         let input = &mut self.input;
         let kb = self.keyboard.get_or_insert_with(|| {
             Keyboard::spawn(std::mem::replace(input, Box::new(std::io::empty())))
@@ -128,6 +156,7 @@ impl HostIo {
         )
         .flush_lines(std::io::stdout().is_terminal())
         .keyboard_thread(std::io::stdin().is_terminal())
+        .raw_terminal(std::io::stdin().is_terminal())
     }
 
     /// Writes `bytes` to `stream`; a [`FLUSH`] byte is not written but flushes the stream (as
@@ -168,6 +197,7 @@ impl HostIo {
 
     /// Fills `buf` from the input (flushing the screen first); [`END_OF_INPUT`] past the end.
     pub(crate) fn read(&mut self, buf: &mut [u8]) -> std::io::Result<()> {
+        self.enter_raw();
         self.screen.flush()?;
         let mut filled = 0;
         while filled < buf.len() {

@@ -102,6 +102,7 @@ pub mod program;
 pub mod remote;
 pub mod sched;
 pub mod stats;
+mod terminal;
 mod ticker;
 pub mod timer;
 pub mod topology;

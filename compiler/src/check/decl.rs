@@ -300,9 +300,8 @@ impl Checker {
         }
         // A channel is not a value: `VAL CHAN OF p c RETYPES d` names channel `d` under another
         // protocol, as the non-VAL form does (occ21 accepts both).
-        let channel = root_type(self, value).is_some_and(|r| {
-            matches!(self.out.types.underlying(elem_of(&r)), Type::Chan(..))
-        });
+        let channel = root_type(self, value)
+            .is_some_and(|r| matches!(self.out.types.underlying(elem_of(&r)), Type::Chan(..)));
         let (from, target, assignable) = if (val && !channel) || !super::place::is_element(value) {
             let t = self.expr(value, None);
             (t.ty, None, false)
