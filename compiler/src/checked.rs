@@ -215,8 +215,9 @@ pub enum AsmOp {
     SlotAddress(i64),
     /// `OUTWORD`: output the word A on the channel whose address is B (a blocking point).
     Outword,
-    /// `CALL p`: call PROC `sym` with A, B, C as its parameters (after dropping A when it is the
-    /// static link occ21 passes to a PROC; occ passes its own); a blocking point.
+    /// `CALL p`: call PROC `sym` with A, B, C as its parameters (after dropping A, the static
+    /// link occ21 passes to a PROC that uses variables declared outside it; occ passes its own);
+    /// a blocking point.
     CallProc {
         /// The PROC.
         sym: SymbolId,

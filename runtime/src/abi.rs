@@ -156,11 +156,12 @@ pub const YIELD_FLAG_OFFSET: i32 = 0;
 pub const ADDR_BASE_OFFSET: i32 =
     (std::mem::offset_of!(Node, arena) + std::mem::offset_of!(crate::arena::Arena, base)) as i32;
 
-/// Byte offset, from the `node` pointer, of two words: the lowest and one past the highest
-/// offset from the address base that is node memory (its workspace chunks). Compiled `ASM`
-/// code checks every address it reads or writes through against them, so a wild address is
-/// the run-time error [`ErrorKind::AddressRange`](crate::ErrorKind::AddressRange), never an
-/// access outside the node's memory.
+/// Byte offset, from the `node` pointer, of two words: the first and one past the last offset
+/// from the address base of the node's first workspace chunk. Compiled `ASM` code checks every
+/// address it reads or writes through against them, and asks [`Entry::AddrOk`] (the node's
+/// other chunks) for one outside them, so a wild address is the run-time error
+/// [`ErrorKind::AddressRange`](crate::ErrorKind::AddressRange), never an access outside the
+/// node's memory.
 pub const ADDR_LIMITS_OFFSET: i32 =
     (std::mem::offset_of!(Node, arena) + std::mem::offset_of!(crate::arena::Arena, limits)) as i32;
 
@@ -429,6 +430,10 @@ entries! {
     Xin = "rt_xin", true, [Ptr, Ptr, Ptr, Ptr, W, Ptr] -> St;
     /// `rt_xend(node, ws, held) -> Status`
     Xend = "rt_xend", true, [Ptr, Ptr, Ptr] -> St;
+    /// `rt_addr_ok(node, offset, bytes) -> Word`: 1 when the `bytes` at `offset` from the
+    /// node's address base lie in one of its workspace chunks, else 0 (the check an `ASM`
+    /// address outside [`ADDR_LIMITS_OFFSET`]'s first chunk falls back to).
+    AddrOk = "rt_addr_ok", false, [Ptr, W, W] -> W;
 }
 
 #[cfg(test)]

@@ -23,8 +23,9 @@ pub(crate) struct Arena {
     /// that `ASM` blocks' 32-bit addresses are offsets from (see
     /// [`crate::abi::ADDR_BASE_OFFSET`]).
     pub(crate) base: Word,
-    /// The byte offsets from `base` of the lowest and one past the highest chunk byte: the
-    /// range an `ASM` address must fall in (see [`crate::abi::ADDR_LIMITS_OFFSET`]).
+    /// The byte offsets from `base` of the first chunk's first and one past its last byte: the
+    /// range `ASM` addresses are checked against first (see [`crate::abi::ADDR_LIMITS_OFFSET`];
+    /// [`Arena::holds`] checks the other chunks).
     pub(crate) limits: [Word; 2],
     /// Next free word in the last chunk.
     used: usize,
@@ -81,22 +82,35 @@ impl Arena {
             let chunk = self.chunks.last().expect("a chunk was just pushed");
             let start = chunk.as_ptr() as Word;
             if self.base == 0 {
-                // Small numbers are never addresses: an INT used by mistake as one is an
+                // Small numbers are not addresses (unless the system puts a later chunk just
+                // below the first): an INT used by mistake as one is an
                 // error, not a write to the first frames.
                 self.base = start - ADDR_GUARD;
                 self.limits = [ADDR_GUARD, ADDR_GUARD];
             }
-            let end = start - self.base + (chunk.len() * size_of::<Word>()) as Word;
-            self.limits = [
-                self.limits[0].min(start - self.base),
-                self.limits[1].max(end),
-            ];
+            if self.chunks.len() == 1 {
+                let end = start - self.base + (chunk.len() * size_of::<Word>()) as Word;
+                self.limits = [start - self.base, end];
+            }
         }
         let chunk = self.chunks.last_mut().expect("a chunk was just ensured");
         let base = chunk[self.used..].as_mut_ptr();
         self.used += total;
         // SAFETY: `base + HEADER_WORDS` is inside the `total` words just reserved.
         unsafe { base.add(slot::HEADER_WORDS) }
+    }
+
+    /// Whether the `bytes` at `offset` from the address base lie in one chunk.
+    pub(crate) fn holds(&self, offset: Word, bytes: Word) -> bool {
+        let Some(end) = offset.checked_add(bytes) else {
+            return false;
+        };
+        bytes >= 0
+            && self.chunks.iter().any(|c| {
+                let start = c.as_ptr() as Word - self.base;
+                let stop = start + (c.len() * size_of::<Word>()) as Word;
+                start <= offset && end <= stop
+            })
     }
 
     /// Returns a workspace to its size's free list.
@@ -115,12 +129,26 @@ impl Arena {
     }
 }
 
+/// `rt_addr_ok(node, offset, bytes)`: see [`crate::abi::Entry::AddrOk`].
+///
+/// # Safety
+/// `node` is the running node.
+pub(crate) unsafe extern "C" fn rt_addr_ok(
+    node: *mut crate::Node,
+    offset: Word,
+    bytes: Word,
+) -> Word {
+    // SAFETY: caller contract.
+    Word::from(unsafe { (*node).arena.holds(offset, bytes) })
+}
+
 #[cfg(test)]
 mod test {
     use super::*;
 
-    /// Every workspace is node memory as `ASM` addresses see it: at or past the guard, inside
-    /// the limits, however many chunks there are.
+    /// Every workspace is node memory as `ASM` addresses see it (a later chunk may lie below
+    /// the first, at a negative offset): in a chunk the arena holds, however many chunks there are; the fast limits are the first
+    /// chunk's; what lies between chunks is not node memory.
     #[test]
     fn workspaces_fall_inside_the_address_limits() {
         let mut arena = Arena::new(64 << 20);
@@ -134,12 +162,17 @@ mod test {
         for (ws, words) in spans {
             let off = ws - arena.base;
             let end = off + (words * size_of::<Word>()) as Word;
-            assert!(
-                off >= arena.limits[0] && end <= arena.limits[1],
-                "{off}..{end}"
-            );
+            assert!(arena.holds(off, end - off), "{off}..{end}");
         }
         let first = arena.chunks[0].as_ptr() as Word;
         assert_eq!(first - arena.base, ADDR_GUARD);
+        let first_end = ADDR_GUARD + (arena.chunks[0].len() * size_of::<Word>()) as Word;
+        assert_eq!(arena.limits, [ADDR_GUARD, first_end]);
+        // Bytes that straddle a chunk's end are not node memory, nor is a negative length.
+        assert!(arena.chunks.iter().all(|c| {
+            let end = c.as_ptr() as Word - arena.base + (c.len() * size_of::<Word>()) as Word;
+            !arena.holds(end - 4, 8) || arena.holds(end, 4)
+        }));
+        assert!(!arena.holds(ADDR_GUARD, -1));
     }
 }

@@ -355,14 +355,33 @@ impl Tr<'_, '_> {
         let end = self.b.ins().iadd_imm_s(off, bytes);
         let above = self.b.ins().icmp(IntCC::SignedGreaterThanOrEqual, off, low);
         let below = self.b.ins().icmp(IntCC::SignedLessThanOrEqual, end, high);
-        let ok = self.b.ins().band(above, below);
+        let fast = self.b.ins().band(above, below);
+        // Outside the first chunk: the runtime looks through the node's other chunks.
+        let slow = self.b.create_block();
+        let done = self.b.create_block();
+        self.b.append_block_param(done, types::I8);
+        self.b.ins().brif(fast, done, &[fast.into()], slow, &[]);
+        self.b.set_cold_block(slow);
+        self.b.switch_to_block(slow);
+        let n = self.iconst(bytes);
+        let held = self.call_rt(Entry::AddrOk, &[self.node, off, n]);
+        let held = self.b.ins().icmp_imm_s(IntCC::NotEqual, held, 0);
+        self.b.ins().jump(done, &[held.into()]);
+        self.b.switch_to_block(done);
+        let ok = self.b.block_params(done)[0];
         self.check(ok, ErrorKind::AddressRange, span);
         let base = self.addr_base();
         self.b.ins().iadd(base, off)
     }
 
-    /// A backward `J` polls for a timeslice (its resume point starts with an empty stack).
+    /// A backward `J` polls for a timeslice. The stack is empty after it, whether or not the
+    /// process was timesliced (a resume point cannot keep it), so a loop that keeps values on
+    /// the stack across `J` fails every time, not only when a timeslice lands (on a T800 the
+    /// stack is undefined after `J`).
     fn asm_jump(&mut self, target: Block, backward: bool, r: Regs, span: Span) {
+        if backward {
+            self.clear(r);
+        }
         if backward && self.in_expr == 0 && self.no_poll == 0 {
             let (idx, resumed) = self.new_resume(span);
             let flag = self.b.ins().load(

@@ -77,6 +77,10 @@ struct Block {
     /// Where the block's `BYTE` and `WORD` bytes start in the program's code image.
     base: usize,
     image: Vec<u8>,
+    /// Where each `LDPI`'s next instruction lies in the code image, in order, and how many of
+    /// them the second pass has used.
+    ldpi: Vec<usize>,
+    ldpi_used: usize,
     reserve: u32,
     ajw_ws: i64,
     ajw_n: i64,
@@ -101,13 +105,13 @@ impl Checker {
             ok &= self.asm_instr(i, &mut b).is_some();
         }
         if ok && self.shadow == 0 {
-            self.asm_labels.extend(b.labels.iter().cloned());
             let code = finish(&mut b);
             if code.low_words.max(code.high_words) > MAX_SLOTS {
                 let what = format!("the block's workspace slots reach beyond {MAX_SLOTS} words");
                 self.asm_error(what, span);
                 return;
             }
+            self.asm_labels.extend(b.labels.iter().cloned());
             self.out.asm_image.append(&mut b.image);
             self.out.asm.insert(span, code);
         }
@@ -130,6 +134,7 @@ impl Checker {
                     }
                     b.labels.push((name, b.base + b.image.len()));
                 }
+                "LDPI" => b.ldpi.push(b.base + b.image.len()),
                 "BYTE" | "WORD" => {
                     for o in &i.operands {
                         match self.asm_data(o, i.code == "WORD") {
@@ -198,6 +203,16 @@ impl Checker {
         let code = i.code.as_str();
         let ops = &i.operands;
         let count = |n: usize| ops.len() == n;
+        // The workspace displacement is counted in text order, so control cannot meet or leave
+        // a point where AJW has moved it.
+        let joins = matches!(code, "" | "J" | "CJ");
+        if joins && (b.ajw_ws != 0 || b.ajw_n != 0) {
+            self.asm_error(
+                "a label, J or CJ where AJW has moved the workspace (move it back first)".into(),
+                i.span,
+            );
+            return None;
+        }
         match code {
             "" => {
                 let name = text(&ops[0]);
@@ -206,13 +221,13 @@ impl Checker {
                 b.depth = None;
             }
             "BYTE" | "WORD" => {}
-            "LD" | "LDAB" | "LDABC" if (1..=3).contains(&ops.len()) && arity(code) == ops.len() => {
+            "LD" | "LDAB" | "LDABC" if operand_count(code) == Some(ops.len()) => {
                 for o in ops.iter().rev() {
                     let op = self.asm_load(o)?;
                     push(b, op, 1);
                 }
             }
-            "ST" | "STAB" | "STABC" if arity(code) == ops.len() => {
+            "ST" | "STAB" | "STABC" if operand_count(code) == Some(ops.len()) => {
                 for o in ops {
                     let e = self.asm_expr(o)?;
                     let op = self.asm_store(&e)?;
@@ -259,13 +274,21 @@ impl Checker {
                 push(b, AsmOp::Const(n), 1);
             }
             "LDPI" if count(0) => {
-                let at = (b.base + b.image.len()) as i64;
-                b.push_op(AsmOp::Ldpi(at));
+                let at = b.ldpi.get(b.ldpi_used).copied()?;
+                b.ldpi_used += 1;
+                b.push_op(AsmOp::Ldpi(at as i64));
             }
             "LB" if count(0) => b.push_op(AsmOp::Lb),
             "WSUB" if count(0) => push(b, AsmOp::Wsub, -1),
             "POP" if count(0) => push(b, AsmOp::Pop, -1),
             "REV" if count(0) => b.push_op(AsmOp::Rev),
+            "OUTWORD" if count(0) && self.valof_depth > 0 => {
+                self.asm_error(
+                    "OUTWORD cannot be used inside a VALOF (no side effects)".into(),
+                    i.span,
+                );
+                return None;
+            }
             "OUTWORD" if count(0) => {
                 b.push_op(AsmOp::Outword);
                 b.depth = Some(0);
@@ -297,9 +320,11 @@ impl Checker {
                 }
             }
             "CALL" if count(1) => self.asm_call(&ops[0], b)?,
-            _ if is_known(code) => {
+            _ if operand_count(code).is_some() => {
+                let n = operand_count(code).unwrap_or_default();
+                let found = ops.len();
                 self.asm_error(
-                    format!("`{code}` takes a different number of operands"),
+                    format!("`{code}` takes {n} operand(s), found {found}"),
                     i.span,
                 );
                 return None;
@@ -619,10 +644,25 @@ impl Checker {
             );
             return None;
         }
+        if !function && self.valof_depth > 0 {
+            self.asm_error(
+                format!("CALL `{t}`: a PROC cannot be called inside a VALOF (no side effects)"),
+                span,
+            );
+            return None;
+        }
+        // What the callee does to variables declared outside it, as an ordinary call records.
+        self.free_variables_of(pid, span);
         let op = if function {
             AsmOp::CallFunction(id)
         } else {
-            let skip_link = b.depth == Some(params.len() + 1);
+            // occ21 passes a static link, in A, to a PROC that uses variables declared outside
+            // it (a nested PROC's free variables); occ supplies its own and drops that one.
+            let first = params.first().copied();
+            let skip_link = self.out.procs[pid]
+                .usage
+                .iter()
+                .any(|a| first.is_none_or(|p| a.symbol < p));
             AsmOp::CallProc { sym: id, skip_link }
         };
         b.push_op(op);
@@ -631,45 +671,42 @@ impl Checker {
     }
 }
 
-/// The number of operands of a load or store instruction.
-fn arity(code: &str) -> usize {
-    match code {
-        "LD" | "ST" => 1,
-        "LDAB" | "STAB" => 2,
-        _ => 3,
-    }
-}
+/// The instructions occ runs, with their operand counts (`BYTE` and `WORD` take any number).
+const INSTRUCTIONS: [(&str, usize); 26] = [
+    ("LD", 1),
+    ("LDAB", 2),
+    ("LDABC", 3),
+    ("ST", 1),
+    ("STAB", 2),
+    ("STABC", 3),
+    ("LDC", 1),
+    ("LDL", 1),
+    ("STL", 1),
+    ("LDLP", 1),
+    ("AJW", 1),
+    ("RESERVELOWWS", 1),
+    ("J", 1),
+    ("CJ", 1),
+    ("LDLABELDIFF", 1),
+    ("LDPI", 0),
+    ("LB", 0),
+    ("WSUB", 0),
+    ("POP", 0),
+    ("REV", 0),
+    ("OUTWORD", 0),
+    ("ADC", 1),
+    ("LDNL", 1),
+    ("STNL", 1),
+    ("PFIX", 1),
+    ("CALL", 1),
+];
 
-fn is_known(code: &str) -> bool {
-    [
-        "LD",
-        "LDAB",
-        "LDABC",
-        "ST",
-        "STAB",
-        "STABC",
-        "LDC",
-        "LDL",
-        "STL",
-        "LDLP",
-        "AJW",
-        "RESERVELOWWS",
-        "J",
-        "CJ",
-        "LDLABELDIFF",
-        "LDPI",
-        "LB",
-        "WSUB",
-        "POP",
-        "REV",
-        "OUTWORD",
-        "ADC",
-        "LDNL",
-        "STNL",
-        "PFIX",
-        "CALL",
-    ]
-    .contains(&code)
+/// The operand count of an instruction occ runs, `None` for one it does not.
+fn operand_count(code: &str) -> Option<usize> {
+    INSTRUCTIONS
+        .iter()
+        .find(|(c, _)| *c == code)
+        .map(|(_, n)| *n)
 }
 
 /// Whether a constant of `ty` fits one 32-bit word (pushed as a constant).

@@ -340,9 +340,9 @@ impl Checker {
         let int =
             |c: &Checker, t: &Type| matches!(c.out.types.underlying(t), Type::Prim(Prim::Int));
         let chan = |c: &Checker, t: &Type| matches!(c.out.types.underlying(t), Type::Chan(..));
-        let root = root_type(self, value);
+        let root = place_type(self, value);
         let kind = match root {
-            Some(r) if int(self, to) && chan(self, elem_of(&r)) => ChanRetype::ToInt,
+            Some(r) if int(self, to) && chan(self, &r) => ChanRetype::ToInt,
             Some(r) if chan(self, to) && int(self, &r) => ChanRetype::FromInt,
             _ => return false,
         };
@@ -701,6 +701,19 @@ pub(super) fn kind_name(kind: &SymbolKind) -> &'static str {
         SymbolKind::Predefined(p) if p.is_proc() => "a predefined PROC",
         SymbolKind::Predefined(_) => "a predefined FUNCTION",
         SymbolKind::External(_) => "an EXTERNAL routine",
+    }
+}
+
+/// The type of a name or a subscript of one (`[4]CHAN INT` for `cs`, `CHAN INT` for `cs[i]`),
+/// from the declarations alone.
+fn place_type(c: &Checker, e: &ast::Expr) -> Option<Type> {
+    match &e.kind {
+        ast::ExprKind::Name(n) => c.scope.lookup(&n.text).map(|id| c.sym(id).ty.clone()),
+        ast::ExprKind::Subscript { base, .. } => match place_type(c, base)? {
+            Type::Array(_, e) => Some(*e),
+            _ => None,
+        },
+        _ => None,
     }
 }
 
