@@ -84,8 +84,6 @@ struct Block {
     reserve: u32,
     ajw_ws: i64,
     ajw_n: i64,
-    /// The number of values on the stack, while it is known (straight-line code).
-    depth: Option<usize>,
     /// The span of the line being checked.
     span: Span,
     ops: Vec<(Pending, Span)>,
@@ -100,7 +98,6 @@ impl Checker {
             ..Block::default()
         };
         let mut ok = self.asm_layout(&instrs, &mut b);
-        b.depth = Some(0);
         for i in &instrs {
             ok &= self.asm_instr(i, &mut b).is_some();
         }
@@ -218,25 +215,24 @@ impl Checker {
                 let name = text(&ops[0]);
                 let at = b.labels.iter().position(|(n, _)| *n == name)?;
                 b.push_op(AsmOp::Label(at));
-                b.depth = None;
             }
             "BYTE" | "WORD" => {}
             "LD" | "LDAB" | "LDABC" if operand_count(code) == Some(ops.len()) => {
                 for o in ops.iter().rev() {
                     let op = self.asm_load(o)?;
-                    push(b, op, 1);
+                    b.push_op(op);
                 }
             }
             "ST" | "STAB" | "STABC" if operand_count(code) == Some(ops.len()) => {
                 for o in ops {
                     let e = self.asm_expr(o)?;
                     let op = self.asm_store(&e)?;
-                    push(b, op, -1);
+                    b.push_op(op);
                 }
             }
             "LDC" if count(1) => {
                 let n = self.asm_constant(&ops[0])?;
-                push(b, AsmOp::Const(n), 1);
+                b.push_op(AsmOp::Const(n));
             }
             "LDL" | "STL" | "LDLP" if count(1) => self.asm_slot(code, &ops[0], b)?,
             "AJW" if count(1) => {
@@ -263,15 +259,10 @@ impl Checker {
                     AsmOp::CondJump(at)
                 };
                 b.push_op(op);
-                b.depth = if code == "J" {
-                    None
-                } else {
-                    b.depth.map(|d| d.saturating_sub(1))
-                };
             }
             "LDLABELDIFF" if count(1) => {
                 let n = self.asm_label_diff(&ops[0], b)?;
-                push(b, AsmOp::Const(n), 1);
+                b.push_op(AsmOp::Const(n));
             }
             "LDPI" if count(0) => {
                 let at = b.ldpi.get(b.ldpi_used).copied()?;
@@ -279,8 +270,8 @@ impl Checker {
                 b.push_op(AsmOp::Ldpi(at as i64));
             }
             "LB" if count(0) => b.push_op(AsmOp::Lb),
-            "WSUB" if count(0) => push(b, AsmOp::Wsub, -1),
-            "POP" if count(0) => push(b, AsmOp::Pop, -1),
+            "WSUB" if count(0) => b.push_op(AsmOp::Wsub),
+            "POP" if count(0) => b.push_op(AsmOp::Pop),
             "REV" if count(0) => b.push_op(AsmOp::Rev),
             "OUTWORD" if count(0) && self.valof_depth > 0 => {
                 self.asm_error(
@@ -291,7 +282,6 @@ impl Checker {
             }
             "OUTWORD" if count(0) => {
                 b.push_op(AsmOp::Outword);
-                b.depth = Some(0);
             }
             "ADC" if count(1) && !self.asm_is_constant(&ops[0]) => {
                 let e = self.asm_expr(&ops[0])?;
@@ -303,12 +293,11 @@ impl Checker {
             }
             "ADC" | "LDNL" | "STNL" if count(1) => {
                 let n = self.asm_constant(&ops[0])?;
-                let (op, d) = match code {
-                    "ADC" => (AsmOp::Adc(n), 0),
-                    "LDNL" => (AsmOp::Ldnl(n), 0),
-                    _ => (AsmOp::Stnl(n), -2),
-                };
-                push(b, op, d);
+                b.push_op(match code {
+                    "ADC" => AsmOp::Adc(n),
+                    "LDNL" => AsmOp::Ldnl(n),
+                    _ => AsmOp::Stnl(n),
+                });
             }
             "PFIX" if count(1) => {
                 if self.asm_constant(&ops[0])? != 0 {
@@ -535,12 +524,12 @@ impl Checker {
                     if self.scope.lookup(&n.text).is_some_and(|id| !matches!(
                         self.sym(id).kind, SymbolKind::Val { value: Some(_) })));
                 if named || is_element(&e) && !matches!(e.kind, ast::ExprKind::Name(_)) {
-                    let (op, d) = match kind {
-                        SlotKind::Load => (self.asm_value(&e)?, 1),
-                        SlotKind::Store => (self.asm_store(&e)?, -1),
-                        SlotKind::Address => (self.asm_address(o)?, 1),
+                    let op = match kind {
+                        SlotKind::Load => self.asm_value(&e)?,
+                        SlotKind::Store => self.asm_store(&e)?,
+                        SlotKind::Address => self.asm_address(o)?,
                     };
-                    push(b, op, d);
+                    b.push_op(op);
                     return Some(());
                 }
                 SlotBase::Number(self.asm_constant(o)?)
@@ -553,12 +542,6 @@ impl Checker {
             ajw_n: b.ajw_n,
         };
         b.ops.push((Pending::Slot(slot), b.span));
-        let d = if matches!(kind, SlotKind::Store) {
-            -1
-        } else {
-            1
-        };
-        b.depth = b.depth.map(|x| ((x as i64 + d).clamp(0, 3)) as usize);
         Some(())
     }
 
@@ -666,7 +649,6 @@ impl Checker {
             AsmOp::CallProc { sym: id, skip_link }
         };
         b.push_op(op);
-        b.depth = if function { Some(1) } else { Some(0) };
         Some(())
     }
 }
@@ -722,12 +704,6 @@ impl Block {
     fn push_op(&mut self, op: AsmOp) {
         self.ops.push((Pending::Op(op), self.span));
     }
-}
-
-/// Appends `op` and follows the stack depth by `d`.
-fn push(b: &mut Block, op: AsmOp, d: i64) {
-    b.push_op(op);
-    b.depth = b.depth.map(|x| ((x as i64 + d).clamp(0, 3)) as usize);
 }
 
 /// Numbers the named slots after the numbered ones and sizes the block's workspace area.
