@@ -233,11 +233,8 @@ fn solve(c: &mut Criterion) {
 
 /// `tri` split `levels` times into four at its edges' midpoints, each part with a value.
 fn split_parts(tri: &Tri, levels: u32) -> Vec<(Tri, f32)> {
-    let mut tris = vec![*tri];
-    for _ in 0..levels {
-        tris = tris.iter().flat_map(Tri::quarters).collect();
-    }
-    tris.into_iter()
+    tri.split(levels)
+        .into_iter()
         .enumerate()
         .map(|(k, t)| (t, 1.0 + (k % 13) as f32))
         .collect()

@@ -497,12 +497,9 @@ mod tests {
 
     /// `tri` split `levels` times into four by its edges' midpoints, each part with a value.
     fn split_parts(tri: &Tri, levels: u32) -> Vec<(Tri, f32)> {
-        let mut tris = vec![*tri];
-        for _ in 0..levels {
-            tris = tris.iter().flat_map(Tri::quarters).collect();
-        }
         // Values that differ from part to part (and repeat rarely).
-        tris.into_iter()
+        tri.split(levels)
+            .into_iter()
             .enumerate()
             .map(|(k, t)| (t, 1.0 + ((k * 7919) % 101) as f32))
             .collect()

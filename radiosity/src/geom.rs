@@ -87,6 +87,15 @@ impl Tri {
         a + ab * (vb * denom) + ac * (vc * denom)
     }
 
+    /// The `4^levels` triangles of splitting into [`Tri::quarters`] `levels` times.
+    pub fn split(&self, levels: u32) -> Vec<Tri> {
+        let mut tris = vec![*self];
+        for _ in 0..levels {
+            tris = tris.iter().flat_map(Tri::quarters).collect();
+        }
+        tris
+    }
+
     /// The four triangles the midpoints of the edges cut this one into: one at each corner,
     /// then the middle one.
     pub fn quarters(&self) -> [Tri; 4] {

@@ -26,7 +26,7 @@ use occ_compiler::checked::{AsmCode, AsmOp, SymbolId};
 use occ_compiler::types::{Prim, Type};
 use occ_grammar::ast::{Expr, ExprKind, Span};
 use occ_runtime::ErrorKind;
-use occ_runtime::abi::{ADDR_BASE_OFFSET, ADDR_LIMITS_OFFSET, Entry, frame, word_offset};
+use occ_runtime::abi::{ADDR_BASE_OFFSET, ADDR_LIMITS_OFFSET, Entry};
 
 use super::{Res, Storage, Tr, mem};
 use crate::layout::{cl_type, is_scalar};
@@ -381,22 +381,12 @@ impl Tr<'_, '_> {
     fn asm_jump(&mut self, target: Block, backward: bool, r: Regs, span: Span) {
         if backward {
             self.clear(r);
-        }
-        if backward && self.in_expr == 0 && self.no_poll == 0 {
-            let (idx, resumed) = self.new_resume(span);
-            let flag = self.b.ins().load(
-                types::I32,
-                MemFlagsData::trusted(),
-                self.node,
-                occ_runtime::abi::YIELD_FLAG_OFFSET,
-            );
-            let slow = self.b.create_block();
-            self.b.ins().brif(flag, slow, &[], target, &[]);
-            self.b.set_cold_block(slow);
-            self.b.switch_to_block(slow);
-            self.poll(idx, resumed);
-            self.b.switch_to_block(resumed);
-            self.clear(r);
+            if self.in_expr == 0 && self.no_poll == 0 {
+                let (idx, resumed) = self.new_resume(span);
+                self.poll(idx, resumed);
+                self.b.switch_to_block(resumed);
+                self.clear(r);
+            }
         }
         self.b.ins().jump(target, &[]);
         let dead = self.b.create_block();
@@ -576,15 +566,7 @@ impl Tr<'_, '_> {
             };
             stores.push((*off, vec![v]));
         }
-        let cw_off = self.frame.sub_workspace(entry.frame_words);
-        let cw = self.local_addr(cw_off);
-        self.store_actuals(&entry, cw, stores);
-        let zero = self.iconst(0);
-        self.b
-            .ins()
-            .store(mem(), zero, cw, word_offset(frame::JOIN));
-        self.enter_frame(cw, entry.id);
-        self.call_native(entry.id, cw, span)?;
+        self.call_with(&entry, stores, span)?;
         self.clear(r);
         Ok(())
     }

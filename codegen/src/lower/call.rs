@@ -108,9 +108,20 @@ impl Tr<'_, '_> {
         // Evaluate the actuals first (they may need temporaries), then place the callee's
         // workspace above everything allocated.
         let stores = self.eval_actuals(&entry, args)?;
+        self.call_with(&entry, stores, span)
+    }
+
+    /// Calls the PROC `entry` with its actuals' values stored (as [`Self::store_actuals`]
+    /// takes them) in a workspace placed above everything allocated.
+    pub(super) fn call_with(
+        &mut self,
+        entry: &ProcEntry,
+        stores: Vec<(i32, Vec<Value>)>,
+        span: Span,
+    ) -> Res<()> {
         let cw_off = self.frame.sub_workspace(entry.frame_words);
         let cw = self.local_addr(cw_off);
-        self.store_actuals(&entry, cw, stores);
+        self.store_actuals(entry, cw, stores);
         let zero = self.iconst(0);
         self.b
             .ins()
