@@ -351,7 +351,19 @@ impl Checker {
                 let what = diags
                     .first()
                     .map_or_else(|| "not an expression".to_string(), |d| d.message.clone());
-                self.asm_error(format!("operand `{}`: {what}", text(o)), span_of(o));
+                // The parser sees the operand inside an abbreviation (`VAL x IS ... :`): its end
+                // reached early is that wrapper's `:` or the end of the text.
+                let written = text(o);
+                let early = (what.contains("`:`") && !written.contains(':'))
+                    || what.contains("end of line")
+                    || what.contains("end of input");
+                let what = if early {
+                    "the expression ends early (an operator, a bracket or a quote is left open)"
+                        .to_string()
+                } else {
+                    what
+                };
+                self.asm_error(format!("operand `{written}`: {what}"), span_of(o));
                 None
             }
         }
@@ -758,8 +770,16 @@ fn finish(b: &mut Block) -> AsmCode {
 }
 
 /// The text of characters, trimmed.
+/// An operand's text as written, its lines joined by a space.
 fn text(o: &[Char]) -> String {
-    o.iter().map(|c| c.c).collect::<String>().trim().to_string()
+    let mut out = String::new();
+    for (k, c) in o.iter().enumerate() {
+        if k > 0 && o[k - 1].line != c.line {
+            out.push(' ');
+        }
+        out.push(c.c);
+    }
+    out.trim().to_string()
 }
 
 fn span_of(o: &[Char]) -> Span {
