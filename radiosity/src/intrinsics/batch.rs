@@ -428,6 +428,67 @@ pub unsafe extern "C" fn corners_receive(
     unsafe { *count = written };
 }
 
+/// `PROC RAD.PATCHES.TAKE (VAL []INT patches, []REAL64 received, []INT got, []REAL64 packed,
+/// RESULT INT count)`: takes what the given patches received (3 REAL64s a patch in `received`,
+/// as [`corners_receive`] books it) and leaves 0 in its place: the patches whose power is not
+/// zero, in the order given, into `got`, and their power into `packed` (3 each). `count` is how
+/// many, or -1 (nothing written) when `received` is not a multiple of 3, a patch is out of its
+/// range, or `got` and `packed` lack room for every patch given.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI); the
+/// written arrays do not overlap.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn patches_take(
+    patches: *const i32,
+    patches_len: Word,
+    received: *mut f64,
+    received_len: Word,
+    got: *mut i32,
+    got_len: Word,
+    packed: *mut f64,
+    packed_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays; occam's usage rules keep the written ones apart.
+    let (patches, received, got, packed) = unsafe {
+        (
+            array(patches, patches_len),
+            array_mut(received, received_len),
+            array_mut(got, got_len),
+            array_mut(packed, packed_len),
+        )
+    };
+    let n = received.len() / 3;
+    let valid = received.len() % 3 == 0
+        && got.len() >= patches.len()
+        && packed.len() >= 3 * patches.len()
+        && patches
+            .iter()
+            .all(|&p| (0..n as i64).contains(&i64::from(p)));
+    let written = if valid {
+        let mut k = 0;
+        for &p in patches {
+            let at = 3 * p as usize;
+            let power = [received[at], received[at + 1], received[at + 2]];
+            if power != [0.0; 3] {
+                got[k] = p;
+                packed[3 * k..3 * k + 3].copy_from_slice(&power);
+                k += 1;
+            }
+            received[at..at + 3].fill(0.0);
+        }
+        k as Word
+    } else {
+        -1
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
 /// `PROC RAD.CORNERS.ROW (VAL []INT point, VAL []REAL64 weight, VAL []REAL32 factor,
 /// []REAL64 row, RESULT INT count)`: the share of a shot's form-factor row that the n element
 /// corners a node holds received, `Σ weight[c] · factor[point[c]]` (a corner weighs a third of
@@ -959,5 +1020,61 @@ mod test {
         assert_eq!(call(&[0, 3], &[1.0, 1.0], &[0.5, 0.0, 0.25], &mut row), -1);
         assert_eq!(call(&[0], &[1.0, 1.0], &[0.5], &mut row), -1);
         assert_eq!(row, [7.0]);
+    }
+
+    #[test]
+    fn patches_take_packs_what_they_received_and_leaves_zero() {
+        type Take = unsafe extern "C" fn(
+            *const i32,
+            Word,
+            *mut f64,
+            Word,
+            *mut i32,
+            Word,
+            *mut f64,
+            Word,
+            *mut Word,
+        );
+        // SAFETY: the table says this is the signature.
+        let f: Take = unsafe { std::mem::transmute(entry("RAD.PATCHES.TAKE")) };
+        let call = |patches: &[i32], received: &mut [f64], got: &mut [i32], packed: &mut [f64]| {
+            let mut count = 0;
+            // SAFETY: valid slices and result.
+            unsafe {
+                f(
+                    patches.as_ptr(),
+                    patches.len() as Word,
+                    received.as_mut_ptr(),
+                    received.len() as Word,
+                    got.as_mut_ptr(),
+                    got.len() as Word,
+                    packed.as_mut_ptr(),
+                    packed.len() as Word,
+                    &mut count,
+                )
+            };
+            count
+        };
+        // Five patches; patch 3 received nothing, patch 4 only blue.
+        let mut received: Vec<f64> = (0..15).map(f64::from).collect();
+        received[9..12].fill(0.0);
+        received[12..14].fill(0.0);
+        let (mut got, mut packed) = ([-1; 3], [-1.0; 9]);
+        assert_eq!(call(&[1, 3, 4], &mut received, &mut got, &mut packed), 2);
+        assert_eq!(got[..2], [1, 4]);
+        assert_eq!(packed[..6], [3.0, 4.0, 5.0, 0.0, 0.0, 14.0]);
+        // The patches taken are left at 0, the others untouched.
+        let mut left: Vec<f64> = (0..15).map(f64::from).collect();
+        left[3..6].fill(0.0);
+        left[9..15].fill(0.0);
+        assert_eq!(received, left);
+        // A patch out of range, or too little room: nothing written.
+        let before = received.clone();
+        assert_eq!(call(&[0, 5], &mut received, &mut got, &mut packed), -1);
+        assert_eq!(
+            call(&[0, 1, 2, 3], &mut received, &mut got, &mut packed),
+            -1
+        );
+        assert_eq!(received, before);
     }
 }

@@ -221,6 +221,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: batch::corners_receive as *const u8,
     },
     Intrinsic {
+        name: "RAD.PATCHES.TAKE",
+        params: &[ValInts, VarReal64s, VarInts, VarReal64s, ResultInt],
+        result: None,
+        addr: batch::patches_take as *const u8,
+    },
+    Intrinsic {
         name: "RAD.REFINE.EDGES",
         params: &[
             ValInts, ValReal32s, ValReal32s, ValReal32s, ValReal32s, VarInts, VarReal32s, ResultInt,
