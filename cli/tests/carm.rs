@@ -10,19 +10,11 @@ use std::sync::OnceLock;
 mod boxes;
 use boxes::{BOXES_SETTINGS, boxes_scene};
 mod common;
-use common::{LAMP, apart, means, scratch, solve};
+use common::{CORNELL_COARSE, LAMP, apart, means, scratch, solve};
 
-/// The same settings for both solvers: a coarse mesh and few rays so that a debug build solves
-/// in seconds; no adaptive subdivision (`carm_subdivides_as_the_reference_solver` has it).
-const SETTINGS: &[&str] = &[
-    "--no-adapt",
-    "--rays",
-    "4",
-    "--element-size",
-    "150",
-    "--image-size",
-    "16",
-];
+/// The same settings for both solvers (`carm_subdivides_as_the_reference_solver` adds
+/// adaptive subdivision's).
+const SETTINGS: &[&str] = &CORNELL_COARSE;
 
 /// Runs `occ radiosity` with `extra` flags into `out` (until 5% of the power is left unshot,
 /// unless `extra` gives another `--until`); returns its report.json.

@@ -6,7 +6,7 @@
 //! report.json per node.
 
 mod common;
-use common::{LAMP, apart, balance_error, means, run, scratch, solve};
+use common::{CORNELL_COARSE, LAMP, apart, balance_error, means, run, scratch, solve};
 
 #[path = "common/boxes.rs"]
 mod boxes;
@@ -91,17 +91,7 @@ fn assert_spread(report: &serde_json::Value, node: u64) {
 /// The Cornell box with every item on every node: each node assembles every voxel.
 #[test]
 fn named_solves_the_cornell_box_as_carm_and_the_reference() {
-    let settings = [
-        "--no-adapt",
-        "--rays",
-        "4",
-        "--element-size",
-        "150",
-        "--image-size",
-        "16",
-        "--until",
-        "unshot=0.05",
-    ];
+    let settings = [&CORNELL_COARSE[..], &["--until", "unshot=0.05"]].concat();
     named_agrees("named-cornell", &settings, &[]);
 }
 

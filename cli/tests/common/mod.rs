@@ -35,6 +35,18 @@ pub fn balance_error(report: &serde_json::Value) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The Cornell box's settings for both solvers: a coarse mesh and few rays so that a debug
+/// build solves in seconds; no adaptive subdivision (the tests that want it say so).
+pub const CORNELL_COARSE: [&str; 7] = [
+    "--no-adapt",
+    "--rays",
+    "4",
+    "--element-size",
+    "150",
+    "--image-size",
+    "16",
+];
+
 /// The table lamp (an octree of eight voxels) at the settings both solvers run it with.
 pub const LAMP: [&str; 10] = [
     concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj"),
