@@ -69,7 +69,7 @@ impl Traversal {
 }
 
 /// Build settings.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct OctreeConfig {
     /// A leaf with more triangles than this is split.
     pub max_leaf: usize,

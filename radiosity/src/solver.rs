@@ -176,6 +176,10 @@ pub struct SolverConfig {
     pub all_stages: bool,
     /// Seconds between rows of the convergence record ([`Cadence`]; 0: a row every shot).
     pub record_every: f64,
+    /// The octree's shape: how many triangles a leaf (voxel) holds at most. Visibility does
+    /// not depend on it (every ray is tested against every triangle it could meet), only the
+    /// time a ray takes and, for carm.occ, how finely the geometry can be spread over nodes.
+    pub octree: OctreeConfig,
 }
 
 impl Default for SolverConfig {
@@ -191,6 +195,7 @@ impl Default for SolverConfig {
             seed: 1,
             all_stages: false,
             record_every: 0.05,
+            octree: OctreeConfig::default(),
         }
     }
 }
@@ -297,7 +302,7 @@ impl<'a> Solver<'a> {
     /// Prepares a solve: builds the octree and books the emitted power as unshot.
     pub fn new(scene: &'a Scene, mesh: Mesh, config: SolverConfig) -> Solver<'a> {
         let tris: Vec<_> = scene.triangles.iter().map(|t| t.tri).collect();
-        let octree = Octree::build(&tris, OctreeConfig::default());
+        let octree = Octree::build(&tris, config.octree);
         let patch_area: Vec<f64> = mesh.patches.iter().map(|t| t.area() as f64).collect();
         let element_area = mesh
             .elements

@@ -12,6 +12,7 @@ use std::time::Instant;
 use anyhow::Context;
 use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::mesh::{Mesh, MeshConfig};
+use occ_radiosity::octree::OctreeConfig;
 use occ_radiosity::output::compare;
 use occ_radiosity::output::{image, plot, ply, probe, report, truth};
 use occ_radiosity::overshoot::Acceleration;
@@ -108,6 +109,12 @@ pub struct Args {
     /// Bytes of a carm.occ node's voxel cache, part of --node-memory (`--solver carm`).
     #[arg(long, value_name = "BYTES", value_parser = parse_bytes, requires = "node_memory")]
     pub cache: Option<u64>,
+    /// Most triangles an octree voxel holds before it is split (the solution does not depend
+    /// on it). Smaller voxels let `--node-memory` spread a small scene's geometry finely: each
+    /// voxel must fit a node's cache.
+    #[arg(long, default_value_t = OctreeConfig::default().max_leaf as u32,
+          value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub voxel_triangles: u32,
     /// Longest patch (shooter) edge; default: scene diagonal / 4.
     #[arg(long)]
     pub patch_size: Option<f32>,
@@ -692,6 +699,10 @@ fn solver_config(args: &Args, diag: f32, element_size: f32) -> SolverConfig {
         seed: args.seed,
         all_stages: args.all_stages,
         record_every: args.record_every,
+        octree: OctreeConfig {
+            max_leaf: args.voxel_triangles as usize,
+            ..OctreeConfig::default()
+        },
         ..SolverConfig::default()
     }
 }
