@@ -514,7 +514,7 @@ fn carm_spreads_a_many_voxel_scene_with_an_eighth_of_it_a_node() {
 /// octree is one voxel), spread so that no node keeps more than an eighth of them.
 #[test]
 fn carm_spreads_the_cornell_box_with_an_eighth_of_it_a_node() {
-    let settings = [&SETTINGS[..], &["--voxel-triangles", "8"][..]].concat();
+    let settings = [SETTINGS, &["--voxel-triangles", "8"][..]].concat();
     let spread = assert_spread_agrees("carm-cornell-spread", &settings, |all| (all / 8, all / 16));
     assert!(
         spread["scene"]["octree"]["leaves"].as_u64() > Some(16),
