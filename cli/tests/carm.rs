@@ -422,6 +422,60 @@ fn carm_refuses_what_it_cannot_do_clearly() {
     }
 }
 
+/// A shot's report naming more patches than one message holds goes up the tree in parts, each
+/// pulled by the node above, merged as they come: with parts of three patches (carm.occ and its
+/// includes copied, `PART.PATCHES` set to 3) the solution is the embedded program's to the bit,
+/// on 4 and 13 nodes, the voxels replicated or spread.
+#[test]
+fn carm_reports_in_parts_give_the_same_solution() {
+    let programs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../programs");
+    let copy = scratch("carm-parts-program");
+    std::fs::create_dir_all(&copy).expect("a scratch folder");
+    let limit = "VAL INT PART.PATCHES IS 4096:";
+    let mut edited = 0;
+    for entry in std::fs::read_dir(&programs).expect("programs/") {
+        let path = entry.expect("an entry").path();
+        let Some(name) = path.file_name() else {
+            continue;
+        };
+        let text = std::fs::read_to_string(&path).expect("a program file");
+        edited += text.matches(limit).count();
+        let text = text.replace(limit, "VAL INT PART.PATCHES IS 3:");
+        std::fs::write(copy.join(name), text).expect("the copy");
+    }
+    assert_eq!(edited, 1, "{limit} is declared once in programs/");
+    let program = copy.join("carm.occ");
+    let program = program.to_str().expect("a UTF-8 path");
+    let lamp = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
+    let lamp = [lamp, "--no-adapt", "--rays", "4", "--until", "unshot=0.05"];
+    let spread = ["--node-memory", "2112", "--cache", "1056"];
+    for (name, settings, nodes) in [
+        ("cornell-4", SETTINGS.to_vec(), "4"),
+        ("cornell-13", SETTINGS.to_vec(), "13"),
+        ("lamp-spread-4", [&lamp[..], &spread[..]].concat(), "4"),
+    ] {
+        let carm = ["--solver", "carm", "--nodes", nodes, "--threads", "1"];
+        let whole = solve(
+            &scratch(&format!("carm-parts-{name}-whole")),
+            &settings,
+            &carm,
+        );
+        let parts = solve(
+            &scratch(&format!("carm-parts-{name}")),
+            &settings,
+            &[&carm[..], &["--program", program][..]].concat(),
+        );
+        assert_eq!(whole["report_parts"], 0, "{name}");
+        assert!(
+            parts["report_parts"].as_u64() > Some(1000),
+            "{name}: {}",
+            parts["report_parts"]
+        );
+        assert_eq!(means(&parts), means(&whole), "{name}");
+        assert_eq!(parts["totals"], whole["totals"], "{name}");
+    }
+}
+
 /// The bytes of all the voxels of a replicated run (each node holds them all).
 fn all_voxel_bytes(report: &serde_json::Value) -> u64 {
     report["nodes"][0]["voxel_bytes"]

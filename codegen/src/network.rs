@@ -436,6 +436,17 @@ impl Compiled {
         }))
     }
 
+    /// The bytes of workspace [`Compiled::run_topology`] takes on each node before the program
+    /// starts: the entry PROC's frame, which holds every process it runs (workspaces are
+    /// static), and the node's link channel words, each with its header. A node's memory
+    /// budget below it fails at the start.
+    pub fn topology_node_bytes(&self) -> usize {
+        let header = abi::slot::HEADER_WORDS;
+        let frame = self.entry_words as usize + abi::frame::ENTRY_SPARE_WORDS + header;
+        let links = 2 * LINKS + header;
+        (frame + links) * WORD_BYTES as usize
+    }
+
     /// Runs the program's last PROC once per node of `shape`. It must take
     /// `(VAL INT id, nodes, []CHAN OF P in?, out!, ...)` with up to three byte channels after:
     /// `id` is the node's number, `nodes` their count, `in[k]`/`out[k]` link `k` (numbered as

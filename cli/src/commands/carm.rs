@@ -71,6 +71,12 @@ const MAX_PROBES: usize = 256;
 const MAX_QUEUE: usize = FETCHES * MAX_NODES;
 const QUEUE_FLOATS: usize = 65_536;
 
+/// The patches one part of a shot's report names at most (carm.occ's `PART.PATCHES`; the
+/// program refuses a `MAX.REPORT` that cannot hold a part), and the likely next shooters whose
+/// elements the last part carries (its `CANDIDATES`).
+const PART_PATCHES: usize = 4096;
+const CANDIDATES: usize = 4;
+
 /// The INTs of a node's counters (carm.occ's `COUNTERS`).
 const COUNTERS: usize = 12;
 
@@ -92,6 +98,7 @@ mod tag {
     pub const REHASHED: i32 = 7;
     pub const SPLIT: i32 = 8;
     pub const MORE_COUNTERS: i32 = 9;
+    pub const RECEIVED: i32 = 10;
 }
 
 /// How to run carm.occ.
@@ -215,6 +222,9 @@ pub struct CarmReport {
     pub links: Vec<LinkCounters>,
     /// The PROCs, FUNCTIONs and intrinsics of the program that nothing calls, not compiled.
     pub left_out: occ_codegen::reach::LeftOut,
+    /// The parts of shots' reports that reached the host before their shot's message (a
+    /// report naming more than carm.occ's `PART.PATCHES` patches comes in parts).
+    pub report_parts: u64,
 }
 
 /// Runs carm.occ on `solver`'s scene and mesh and books its solution into `solver` (irradiance,
@@ -288,7 +298,11 @@ pub fn solve(
         more: answers,
     };
     let host = HostIo::new(Box::new(keyboard), Box::new(tap), Box::new(errors.clone())).binary();
+    // Every node's processes live in the program's frame, sized for the scene by its
+    // capacities: a node gets the room that takes (more than the runtime's default only for
+    // large scenes), reported as its peak_bytes.
     let mut node = NodeConfig::default();
+    node.memory_budget = node.memory_budget.max(compiled.topology_node_bytes());
     if settings.threads == 1 {
         node.counted_slices = Some(COUNTED_SLICE);
     }
@@ -389,11 +403,14 @@ fn capacities(
         ),
         ("MAX.VOXEL", items.largest()),
         ("MAX.OBJECTS", solver.scene.objects.len()),
-        // a shot's report (3 a patch), a gather's (3 an element of one patch), a refining
-        // shot's (a row of 5 a sample point)
+        // a part of a shot's report (3 a patch) with room for the candidates' elements, a
+        // gather's (3 an element of one patch), a refining shot's (a row of 5 a sample point)
         (
             "MAX.REPORT",
-            (3 * mesh.patches.len().max(most_in_one)).max(if growth > 0 { 5 * points } else { 0 }),
+            (3 * mesh.patches.len().min(PART_PATCHES)
+                + 3 * CANDIDATES * most_elements_of_one_patch(mesh))
+            .max(3 * most_in_one)
+            .max(if growth > 0 { 5 * points } else { 0 }),
         ),
     ];
     if let Some(named) = &items.named {
@@ -936,6 +953,9 @@ enum Message {
     Counters([u64; COUNTERS]),
     /// The program's own counters of the node whose [`Message::Counters`] came last.
     MoreCounters(Vec<u64>),
+    /// A part of the next shot's report, when it was too long for one message: the power
+    /// (RGB) each of these patches received (ascending, below the next part's).
+    Received(Vec<(usize, DVec3)>),
     /// A read of voxel `1` from the backing store for node `0`.
     Read(i32, i32),
     /// Every patch's unshot power left.
@@ -971,6 +991,18 @@ impl Message {
         }
     }
 
+    /// A list of patches that received power: their count, the patches, the power of each.
+    fn received(r: &mut Reader) -> Result<Vec<(usize, DVec3)>, Short> {
+        let count = usize::try_from(r.int()?).map_err(|_| Short)?;
+        let patches = (0..count)
+            .map(|_| r.int().map(|p| p as usize))
+            .collect::<Result<Vec<_>, _>>()?;
+        patches
+            .into_iter()
+            .map(|p| Ok((p, DVec3::new(r.real64()?, r.real64()?, r.real64()?))))
+            .collect()
+    }
+
     fn read(r: &mut Reader) -> Result<Message, Short> {
         let rgb64 =
             |r: &mut Reader| Ok::<_, Short>(DVec3::new(r.real64()?, r.real64()?, r.real64()?));
@@ -979,14 +1011,7 @@ impl Message {
             tag::SHOT => {
                 let [shots, src, form_factors, rays, micros] = [(); 5].map(|_| r.int());
                 let (shot, unshot_fraction, lent) = (rgb64(r)?, r.real64()?, rgb64(r)?);
-                let count = usize::try_from(r.int()?).map_err(|_| Short)?;
-                let patches = (0..count)
-                    .map(|_| r.int().map(|p| p as usize))
-                    .collect::<Result<Vec<_>, _>>()?;
-                let received = patches
-                    .into_iter()
-                    .map(|p| Ok((p, rgb64(r)?)))
-                    .collect::<Result<_, _>>()?;
+                let received = Message::received(r)?;
                 Message::Shot {
                     shots: shots? as u64,
                     src: src? as usize,
@@ -1003,6 +1028,7 @@ impl Message {
                 let g = r.int()? as usize;
                 Message::Result(g, Vec3::new(r.real32()?, r.real32()?, r.real32()?))
             }
+            tag::RECEIVED => Message::Received(Message::received(r)?),
             tag::READ => Message::Read(r.int()?, r.int()?),
             tag::SPLIT => {
                 let [a, b, m] = [(); 3].map(|_| r.int().map(|v| v as u32));
@@ -1051,6 +1077,8 @@ struct Booked {
     rehashed: Vec<u64>,
     /// Each node's counters of the program's own ([`Message::MoreCounters`]), by node.
     more: std::collections::BTreeMap<u64, Vec<u64>>,
+    /// The parts of shots' reports that came before their shot ([`Message::Received`]).
+    parts: u64,
 }
 
 /// Books what the root wrote into `solver`; returns what it reported of the nodes.
@@ -1069,6 +1097,9 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
     let mut rehashed = Vec::new();
     let mut more = std::collections::BTreeMap::new();
     let mut results = 0;
+    // the parts of the next shot's report so far, and how many parts came in all
+    let mut pending = Vec::new();
+    let mut parts = 0u64;
     let mut at = 0;
     loop {
         let Some((message, len)) = Message::decode(&bytes[at..])
@@ -1080,6 +1111,10 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
         match message {
             Message::End => break,
             Message::Read(..) => {}
+            Message::Received(part) => {
+                parts += 1;
+                pending.extend(part);
+            }
             Message::Shot {
                 shots,
                 src,
@@ -1088,9 +1123,12 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
                 micros,
                 shot,
                 lent,
-                received,
+                received: last,
                 ..
             } => {
+                // the parts that came before the shot's message, then its own
+                let mut received = std::mem::take(&mut pending);
+                received.extend(last);
                 let ascending = received.windows(2).all(|w| w[0].0 < w[1].0);
                 anyhow::ensure!(
                     src < patches && ascending && received.last().is_none_or(|r| r.0 < patches),
@@ -1177,10 +1215,15 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
         last.errors = errors;
     }
     nodes.sort_by_key(|c| c[0]);
+    anyhow::ensure!(
+        pending.is_empty(),
+        "carm.occ sent part of a shot's report and no shot after it"
+    );
     Ok(Booked {
         nodes,
         rehashed,
         more,
+        parts,
     })
 }
 
@@ -1251,6 +1294,7 @@ fn report(
     CarmReport {
         nodes,
         links,
+        report_parts: booked.parts,
         ..CarmReport::default()
     }
 }

@@ -774,6 +774,7 @@ fn write_outputs(
         json["solver"] = "carm".into();
         json["nodes"] = serde_json::to_value(&net.nodes)?;
         json["links"] = serde_json::to_value(&net.links)?;
+        json["report_parts"] = net.report_parts.into();
     }
     write(
         "report.json",
