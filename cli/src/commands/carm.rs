@@ -379,6 +379,8 @@ fn capacities(
     let most_in_one = most_elements_of_one_patch(mesh) + 2 * growth;
     let mut capacities = vec![
         ("MAX.POINTS", points),
+        // adaptive subdivision's arrays at the root: none when it can add no point
+        ("MAX.REFINE.POINTS", if growth > 0 { points } else { 1 }),
         ("NODE.POINTS", share(points).min(points)),
         (
             "NODE.CORNERS",
