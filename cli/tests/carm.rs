@@ -600,7 +600,7 @@ fn carm_refuses_bad_voxel_budgets_by_name() {
         ),
         (
             &["--node-memory", "4K", "--cache", "2K", "--nodes", "200"][..],
-            "too few for 200 nodes each fetching 2 voxels of up to 1056 bytes",
+            "too few for 200 nodes each fetching 8 voxels of up to 1056 bytes",
         ),
         (&["--node-memory", "4096"][..], "--cache"),
         (&["--node-memory", "4096", "--cache", "2Q"][..], "K, M or G"),

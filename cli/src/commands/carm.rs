@@ -59,17 +59,18 @@ const MAX_NODES: usize = 1024;
 /// little-endian, in voxel order.
 pub const BACKING_STORE: &str = "backing-store.bin";
 
-/// carm.occ's fixed limits that spreading the voxels must respect (its `FETCHES`, `MAX.QUEUE`
-/// and `QUEUE.FLOATS`): the voxels a node asks for at a time, and a link queue's messages and
-/// REAL32s. (Its voxel pool, `MAX.POOL`, is sized from `--node-memory`.)
-const FETCHES: usize = 2;
+/// carm.occ's fixed limits that spreading the voxels must respect (its `FETCHES` and
+/// `MAX.QUEUE`): the voxels a node asks for at a time, and a link queue's messages. A link
+/// queue's REAL32s (its capacity `QUEUE.FLOATS`) hold every node's fetches of the largest voxel,
+/// at most [`QUEUE_FLOATS_MOST`]; its voxel pool, `MAX.POOL`, is sized from `--node-memory`.
+const FETCHES: usize = 8;
 
 /// carm.occ's `MAX.PROBES`: the midpoints one round of adaptive subdivision evaluates; a round
 /// adds at most ten element corners to a node and two elements a midpoint (its `ROUND.CORNERS`,
 /// `ROUND.ELEMENTS`), the room it keeps free.
 const MAX_PROBES: usize = 256;
 const MAX_QUEUE: usize = FETCHES * MAX_NODES;
-const QUEUE_FLOATS: usize = 65_536;
+const QUEUE_FLOATS_MOST: usize = 262_144;
 
 /// The patches one part of a shot's report names at most (carm.occ's `PART.PATCHES`; the
 /// program refuses a `MAX.REPORT` that cannot hold a part), and the likely next shooters whose
@@ -404,6 +405,17 @@ fn capacities(
                 }),
         ),
         ("MAX.VOXEL", items.largest()),
+        // a link queue's room for voxel answers: every node's fetches of the largest voxel
+        // when the voxels are spread (the check in `spread` keeps it within
+        // QUEUE_FLOATS_MOST), one voxel's when every node holds them all (no fetches)
+        (
+            "QUEUE.FLOATS",
+            items.largest().max(1)
+                * match settings.memory {
+                    Some(_) => (settings.nodes * FETCHES).min(MAX_QUEUE),
+                    None => 1,
+                },
+        ),
         ("MAX.OBJECTS", solver.scene.objects.len()),
         // a part of a shot's report (3 a patch) with room for the candidates' elements, a
         // gather's (3 an element of one patch), a refining shot's (a row of 5 a sample point)
@@ -843,11 +855,11 @@ fn spread(items: &Items, memory: &Memory, nodes: usize) -> anyhow::Result<(Vec<i
     );
     let floats = (largest / 4).max(1) as usize;
     anyhow::ensure!(
-        nodes * FETCHES <= MAX_QUEUE.min(QUEUE_FLOATS / floats),
+        nodes * FETCHES <= MAX_QUEUE.min(QUEUE_FLOATS_MOST / floats),
         "--node-memory: carm.occ's link queues hold {} bytes of voxel answers, too few for {nodes} \
          nodes each fetching {FETCHES} voxels of up to {largest} bytes (fewer --nodes, or a scene \
          with smaller voxels)",
-        4 * QUEUE_FLOATS
+        4 * QUEUE_FLOATS_MOST
     );
     let room = memory.node - memory.cache;
     let mut shares = vec![0u64; nodes];

@@ -243,6 +243,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: refine::refine_split as *const u8,
     },
     Intrinsic {
+        name: "RAD.POINTS.ORDER",
+        params: &[ValReal32s, VarInts, ResultInt],
+        result: None,
+        addr: order::points_order as *const u8,
+    },
+    Intrinsic {
         name: "RAD.CORNERS.ROW",
         params: &[ValInts, ValReal64s, ValReal32s, VarReal64s, ResultInt],
         result: None,
@@ -706,6 +712,7 @@ pub unsafe extern "C" fn shadow_rays_batch(
 mod assemble;
 mod batch;
 pub mod estimate;
+mod order;
 mod refine;
 #[cfg(test)]
 mod test;
