@@ -551,6 +551,56 @@ mod tests {
     }
 
     #[test]
+    fn a_hung_sheet_takes_on_its_back_the_ceilings_form_factor_to_it() {
+        // A square panel 0.3..0.7 facing down at height 0.8 in the unit box: each ceiling
+        // triangle sends it, on its back, the mean over the triangle of the point form factor
+        // to the square (nothing lies between them).
+        let mut tris = cube(1.0, false);
+        let y = 0.8;
+        let q = [0.3, 0.7].map(|x| [0.3, 0.7].map(|z| Vec3::new(x, y, z)));
+        tris.push(Tri::new(q[0][0], q[1][0], q[1][1]));
+        tris.push(Tri::new(q[0][0], q[1][1], q[0][1]));
+        assert!(tris[12..].iter().all(|t| t.normal().y < 0.0));
+        let hidden = vec![false; tris.len()];
+        let (a, sheet) = SceneAnalysis::with_sheets(&tris, &hidden, 1.7);
+        assert!(a.closed && a.sheets == 2 && sheet[12] && sheet[13], "{a:?}");
+        let g = 64;
+        let shares = back_shares(&tris, &hidden, &sheet, 1.7, g);
+        let square = [q[0][0], q[1][0], q[1][1], q[0][1]];
+        let mut ceilings = 0;
+        for (t, cells) in tris.iter().zip(&shares) {
+            let mean = cells.iter().map(|&b| f64::from(b)).sum::<f64>() / f64::from(g * g);
+            if t.normal().y.abs() < 0.5 {
+                // The walls see the back at a grazing angle from above y = 0.8.
+                assert!(mean > 0.0 && mean < 0.05, "{t:?}: {mean}");
+                continue;
+            }
+            if t.normal().y > -0.5 || t.centroid().y < 0.9 {
+                // The floor and the panel cannot see it: no rays cast.
+                assert!(cells.is_empty(), "{t:?}");
+                continue;
+            }
+            ceilings += 1;
+            let n = 200;
+            let exact = (0..n * n)
+                .map(|k| {
+                    let (u, v) = ((k / n) as f32 + 0.5, (k % n) as f32 + 0.5);
+                    let p = t.sample(u / n as f32, v / n as f32);
+                    f64::from(crate::formfactor::point_polygon(p, t.normal(), &square))
+                })
+                .sum::<f64>()
+                / f64::from(n * n);
+            let rays = f64::from(g * g * BACK_RAYS_PER_CELL);
+            let std_err = (exact * (1.0 - exact) / rays).sqrt();
+            assert!(
+                exact > 0.1 && (mean - exact).abs() < 4.0 * std_err,
+                "{mean} against {exact} ± {std_err}"
+            );
+        }
+        assert_eq!(ceilings, 2);
+    }
+
+    #[test]
     fn all_stages_keeps_the_shadow_rays() {
         let a = analyse(&cube(1.0, false), 1.7);
         assert!(!Stages::for_scene(&a, false).shadow_rays);
