@@ -83,10 +83,10 @@ fn closed_rooms_book_as_escaped_only_what_lands_on_the_lamps_back() {
     // Without closed rows these settings booked 1.30 / 1.16 / 0.97% (two rooms) and 1.56 /
     // 1.45 / 1.33% (table) as escaped: the receivers' quadrature error and the panels' backs
     // together; with them, 0.86 / 0.75 / 0.57% and 0.20 / 0.15 / 0.10%. What is left is the
-    // backs' share: in the two rooms the ceiling over the panel, 5 cm behind it, sends it
-    // nearly all it sends (and the coarse elements straddling the panel's outline shoot from
-    // there power that the room beside it received); under the table lamp the ceiling, 0.9 m
-    // above it, sees it from everywhere, each point little.
+    // backs' share: in the two rooms the panel hangs 5 cm below the ceiling, so the ceiling
+    // within a few centimetres of its outline sends it a large part of what it sends, and the
+    // ceiling over it nearly all; under the table lamp the ceiling, 0.9 m above it, sees it
+    // from everywhere, each point little.
     for (name, bound) in [("two-rooms.obj", 0.01), ("table-lamp.obj", 0.004)] {
         let share = escaped_share(&load(name, "rooms.mtl"));
         assert!(
