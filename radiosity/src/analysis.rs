@@ -128,7 +128,7 @@ impl SceneAnalysis {
             .filter(|&p| !hidden[p] && !sheet[p])
             .map(|p| patches[p])
             .collect();
-        let bounds_the_air = (0..patches.len()).all(|p| {
+        let bounds_the_air = (0..patches.len()).into_par_iter().all(|p| {
             let [front, back] = probes(&patches[p], diagonal);
             let air = |q: DVec3| (winding_at(&bounds, q) - 1.0).abs() < WINDING_TOLERANCE;
             hidden[p] || (air(front) && (!sheet[p] || air(back)))
@@ -151,16 +151,28 @@ impl SceneAnalysis {
 /// The patches hung in the air: the mean winding number of all the patches just in front of
 /// and just behind the patch is over 0.75 (about 1 for a sheet, whose sides both face the air,
 /// about 0.5 for a patch between the air and a solid or the outside; see
-/// [`SceneAnalysis::of`]). Hidden patches are never sheets.
+/// [`SceneAnalysis::of`]). Hidden patches are never sheets, and neither is a side of a two-sided
+/// surface (a patch whose centroid lies on a patch facing the other way): what meets its back
+/// meets the other side's front.
 pub fn sheets(patches: &[Tri], hidden: &[bool], diagonal: f32) -> Vec<bool> {
     let visible: Vec<Tri> = (0..patches.len())
         .filter(|&p| !hidden[p])
         .map(|p| patches[p])
         .collect();
+    let eps = 1e-5 * diagonal;
+    let backed = |t: &Tri| {
+        let (c, n) = (t.centroid(), t.normal());
+        visible.iter().any(|r| {
+            r.normal().dot(n) < -0.999 && r.normal().dot(c - r.v[0]).abs() <= eps && r.contains(c)
+        })
+    };
     (0..patches.len())
+        .into_par_iter()
         .map(|p| {
             let [front, back] = probes(&patches[p], diagonal);
-            !hidden[p] && winding_at(&visible, front) + winding_at(&visible, back) > 1.5
+            !hidden[p]
+                && winding_at(&visible, front) + winding_at(&visible, back) > 1.5
+                && !backed(&patches[p])
         })
         .collect()
 }
@@ -508,6 +520,26 @@ mod tests {
         tris.extend(block(Vec3::new(0.2, 0.1, 0.3), Vec3::new(0.5, 0.4, 0.6)));
         let a = analyse(&tris, 1.7);
         assert!(!a.convex && a.closed && a.sheets == 0, "{a:?}");
+    }
+
+    #[test]
+    fn a_two_sided_partition_in_a_box_is_no_sheet() {
+        // A square partition standing in the box, one triangle pair facing each way: what meets
+        // the back of one side meets the front of the other.
+        let mut tris = cube(1.0, false);
+        let q = [0.2, 0.8].map(|y| [0.2, 0.8].map(|z| Vec3::new(0.5, y, z)));
+        let side = [
+            Tri::new(q[0][0], q[1][0], q[1][1]),
+            Tri::new(q[0][0], q[1][1], q[0][1]),
+        ];
+        tris.extend(side);
+        tris.extend(side.map(|t| Tri::new(t.v[0], t.v[2], t.v[1])));
+        let a = analyse(&tris, 1.7);
+        assert!(!a.convex && a.closed && a.sheets == 0, "{a:?}");
+        // One side alone is a sheet.
+        tris.truncate(14);
+        let a = analyse(&tris, 1.7);
+        assert!(a.closed && a.sheets == 2, "{a:?}");
     }
 
     #[test]
