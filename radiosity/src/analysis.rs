@@ -70,7 +70,11 @@ impl SceneAnalysis {
     /// solid angles over 4π), which is an integer off an oriented surface without boundary
     /// (every edge's two sides cancel, T-junctions and all), changes by 1 across each patch,
     /// and is fractional wherever a rim is left: at the edge of a hole and at the rim of a
-    /// sheet.
+    /// sheet. The surface is the visible patches (the hidden ones lie where surfaces touch: a
+    /// table leg that is an open tube closes on the floor and the table's underside, whose
+    /// pieces under it are hidden) or, failing that, all of them (a panel a hair below a
+    /// ceiling hides the part of the ceiling it covers, which closes the ceiling); every patch
+    /// either counts stops a ray, so either is a proof.
     /// 1. Sheets are found first: a patch whose two sides both face the air has `w` about 1.5
     ///    just in front and 0.5 just behind (its own half-space of solid angle either way),
     ///    while a patch bounding the air has about 1 and 0: the mean of the two, over 0.75,
@@ -123,40 +127,57 @@ impl SceneAnalysis {
         if patches.len() > MAX_ENCLOSURE_PATCHES {
             return (analysis, no_sheets);
         }
-        let sheet = sheets(patches, hidden, diagonal);
-        let bounds: Vec<Tri> = (0..patches.len())
-            .filter(|&p| !hidden[p] && !sheet[p])
-            .map(|p| patches[p])
-            .collect();
-        let bounds_the_air = (0..patches.len()).into_par_iter().all(|p| {
-            let [front, back] = probes(&patches[p], diagonal);
-            let air = |q: DVec3| (winding_at(&bounds, q) - 1.0).abs() < WINDING_TOLERANCE;
-            hidden[p] || (air(front) && (!sheet[p] || air(back)))
-        });
-        if !bounds_the_air {
-            return (analysis, no_sheets);
+        // The air is bounded by the visible patches (hidden ones lie in contact, where open
+        // tubes such as table legs stand) or, failing that, by all of them (a panel a hair
+        // below a ceiling hides the part of it that it covers): either way every patch counted
+        // stops a ray.
+        for surface in [Surface::Visible, Surface::All] {
+            let counted = |p: usize| surface == Surface::All || !hidden[p];
+            let sheet = sheets(patches, hidden, &counted, diagonal);
+            let bounds: Vec<Tri> = (0..patches.len())
+                .filter(|&p| counted(p) && !sheet[p])
+                .map(|p| patches[p])
+                .collect();
+            let bounds_the_air = (0..patches.len()).into_par_iter().all(|p| {
+                let [front, back] = probes(&patches[p], diagonal);
+                let air = |q: DVec3| (winding_at(&bounds, q) - 1.0).abs() < WINDING_TOLERANCE;
+                hidden[p] || (air(front) && (!sheet[p] || air(back)))
+            });
+            if bounds_the_air {
+                let sheets = sheet.iter().filter(|&&s| s).count();
+                let analysis = SceneAnalysis {
+                    closed: true,
+                    sheets,
+                    ..analysis
+                };
+                return (analysis, sheet);
+            }
         }
-        let sheets = sheet.iter().filter(|&&s| s).count();
-        (
-            SceneAnalysis {
-                closed: true,
-                sheets,
-                ..analysis
-            },
-            sheet,
-        )
+        (analysis, no_sheets)
     }
 }
 
-/// The patches hung in the air: the mean winding number of all the patches just in front of
+/// Which patches the closure test counts as the surface.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Surface {
+    Visible,
+    All,
+}
+
+/// The patches hung in the air: the mean winding number of the `counted` patches just in front of
 /// and just behind the patch is over 0.75 (about 1 for a sheet, whose sides both face the air,
 /// about 0.5 for a patch between the air and a solid or the outside; see
 /// [`SceneAnalysis::of`]). Hidden patches are never sheets, and neither is a side of a two-sided
 /// surface (a patch whose centroid lies on a patch facing the other way): what meets its back
 /// meets the other side's front.
-pub fn sheets(patches: &[Tri], hidden: &[bool], diagonal: f32) -> Vec<bool> {
+pub fn sheets(
+    patches: &[Tri],
+    hidden: &[bool],
+    counted: &(dyn Fn(usize) -> bool + Sync),
+    diagonal: f32,
+) -> Vec<bool> {
     let visible: Vec<Tri> = (0..patches.len())
-        .filter(|&p| !hidden[p])
+        .filter(|&p| counted(p))
         .map(|p| patches[p])
         .collect();
     let eps = 1e-5 * diagonal;

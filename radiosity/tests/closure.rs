@@ -95,3 +95,92 @@ fn closed_rooms_book_as_escaped_only_what_lands_on_the_lamps_back() {
         );
     }
 }
+
+/// A closed room of the Cornell box's size with its light `gap` below the ceiling (two
+/// triangles facing down), meshed at the default sizes; returns the analysis and the share of
+/// a ceiling patch's row that lands on the light's back, the largest over the ceiling.
+fn hung_light(gap: f32) -> (SceneAnalysis, f32) {
+    use glam::Vec3;
+    use occ_radiosity::geom::Tri;
+    use occ_radiosity::scene::{Object, SceneTri};
+    let mut scene = common_box();
+    scene.objects.push(Object {
+        name: "light".into(),
+        reflectance: Vec3::ZERO,
+        emission: Vec3::splat(10.0),
+    });
+    let y = 549.0 - gap;
+    let p = [
+        (213.0, 227.0),
+        (343.0, 227.0),
+        (343.0, 332.0),
+        (213.0, 332.0),
+    ]
+    .map(|(x, z)| Vec3::new(x, y, z));
+    for tri in [Tri::new(p[0], p[1], p[2]), Tri::new(p[0], p[2], p[3])] {
+        assert!(tri.normal().y < 0.0);
+        scene.triangles.push(SceneTri { tri, object: 6 });
+    }
+    let mesh = mesh(&scene);
+    let hidden = mesh.hidden_patches();
+    let d = scene.diagonal();
+    let (a, sheet) = SceneAnalysis::with_sheets(&mesh.patches, &hidden, d);
+    let shares = occ_radiosity::analysis::back_shares(&mesh.patches, &hidden, &sheet, d, 24);
+    let most = (shares.iter().zip(&mesh.patch_object))
+        .filter(|(_, o)| **o == 3)
+        .flat_map(|(s, _)| s.iter().copied())
+        .fold(0.0f32, f32::max);
+    (a, most)
+}
+
+/// The closed 556 x 549 x 559 room, faces inward, ρ = 0.7 (the `+y` face, object 3, is the
+/// ceiling).
+fn common_box() -> Scene {
+    use glam::Vec3;
+    use occ_radiosity::geom::Tri;
+    use occ_radiosity::scene::{Object, SceneTri};
+    let (lo, hi) = (Vec3::ZERO, Vec3::new(556.0, 549.0, 559.0));
+    let mut scene = Scene::default();
+    for (f, name) in ["-x", "+x", "-y", "+y", "-z", "+z"].iter().enumerate() {
+        let (axis, at_hi) = (f / 2, f % 2 == 1);
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let corner = |a: bool, b: bool| {
+            let mut p = lo;
+            p[axis] = if at_hi { hi[axis] } else { lo[axis] };
+            p[u] = if a { hi[u] } else { lo[u] };
+            p[v] = if b { hi[v] } else { lo[v] };
+            p
+        };
+        let q = [
+            corner(false, false),
+            corner(true, false),
+            corner(true, true),
+            corner(false, true),
+        ];
+        let mut t = [Tri::new(q[0], q[1], q[2]), Tri::new(q[0], q[2], q[3])];
+        if (t[0].normal()[axis] < 0.0) != at_hi {
+            t = [Tri::new(q[0], q[2], q[1]), Tri::new(q[0], q[3], q[2])];
+        }
+        scene.objects.push(Object {
+            name: name.to_string(),
+            reflectance: Vec3::splat(0.7),
+            emission: Vec3::ZERO,
+        });
+        scene.triangles.extend(t.map(|tri| SceneTri {
+            tri,
+            object: f as u32,
+        }));
+    }
+    scene
+}
+
+#[test]
+fn a_light_hung_below_a_ceiling_leaves_the_room_closed_and_takes_what_its_back_is_sent() {
+    // A hair below (0.1: the ceiling it covers is hidden, and shoots nothing) and 50 below
+    // the ceiling (the ceiling over it sends it nearly all it sends).
+    for gap in [0.1, 50.0] {
+        let (a, most) = hung_light(gap);
+        assert!(!a.convex && a.closed && a.sheets == 2, "gap {gap}: {a:?}");
+        assert!(gap < 1.0 || most > 0.9, "gap {gap}: {most}");
+    }
+}
