@@ -39,7 +39,7 @@ use crate::rng::Pcg32;
 pub const MAX_PLANES: usize = 256;
 
 /// Non-convex scenes with more patches than this are not tested for closure (the test costs
-/// up to 4 × patches² solid angles); they are taken to be open.
+/// up to about 6 × patches² solid angles); they are taken to be open.
 pub const MAX_ENCLOSURE_PATCHES: usize = 2048;
 
 /// The winding number of a closed surface around its centre must be 1 within this.
