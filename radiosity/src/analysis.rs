@@ -176,14 +176,14 @@ pub fn sheets(
     counted: &(dyn Fn(usize) -> bool + Sync),
     diagonal: f32,
 ) -> Vec<bool> {
-    let visible: Vec<Tri> = (0..patches.len())
+    let surface: Vec<Tri> = (0..patches.len())
         .filter(|&p| counted(p))
         .map(|p| patches[p])
         .collect();
     let eps = 1e-5 * diagonal;
     let backed = |t: &Tri| {
         let (c, n) = (t.centroid(), t.normal());
-        visible.iter().any(|r| {
+        surface.iter().any(|r| {
             r.normal().dot(n) < -0.999 && r.normal().dot(c - r.v[0]).abs() <= eps && r.contains(c)
         })
     };
@@ -192,7 +192,7 @@ pub fn sheets(
         .map(|p| {
             let [front, back] = probes(&patches[p], diagonal);
             !hidden[p]
-                && winding_at(&visible, front) + winding_at(&visible, back) > 1.5
+                && winding_at(&surface, front) + winding_at(&surface, back) > 1.5
                 && !backed(&patches[p])
         })
         .collect()
