@@ -764,6 +764,18 @@ impl Mesh {
         }
     }
 
+    /// Whether each patch is hidden: every corner of every element of it is (covered, or
+    /// enclosed by contact; it receives nothing, so it never shoots).
+    pub fn hidden_patches(&self) -> Vec<bool> {
+        let mut hidden = vec![true; self.patches.len()];
+        for e in &self.elements {
+            if e.v.iter().any(|&v| !self.vertices[v as usize].hidden()) {
+                hidden[e.patch as usize] = false;
+            }
+        }
+        hidden
+    }
+
     /// Returns the total area of the elements of each object.
     pub fn object_areas(&self, objects: usize) -> Vec<f64> {
         let mut area = vec![0.0; objects];

@@ -289,6 +289,10 @@ pub struct Solver<'a> {
     pub reference: Option<Vec<Option<DVec3>>>,
     config: SolverConfig,
     patch_area: Vec<f64>,
+    /// The share of each patch's form-factor row that lands on the backs of sheets, per cell of
+    /// its source-density grid (empty: none; [`analysis::back_shares`]): what a closed row
+    /// leaves out.
+    back_share: Vec<Vec<f32>>,
     element_area: Vec<f64>,
     /// Unshot power of each element (a patch's is the sum over its elements): where on the
     /// patch the power it shoots comes from.
@@ -323,7 +327,16 @@ impl<'a> Solver<'a> {
             unshot[e.patch as usize] += *u;
         }
         let emitted = unshot.iter().fold(DVec3::ZERO, |s, u| s + *u).to_array();
-        let analysis = SceneAnalysis::of(&mesh.patches, scene.diagonal());
+        let hidden = mesh.hidden_patches();
+        let (analysis, sheet) =
+            SceneAnalysis::with_sheets(&mesh.patches, &hidden, scene.diagonal());
+        let back_share = analysis::back_shares(
+            &mesh.patches,
+            &hidden,
+            &sheet,
+            scene.diagonal(),
+            DENSITY_GRID,
+        );
         Solver {
             analysis,
             stages: Stages::for_scene(&analysis, config.all_stages),
@@ -342,6 +355,7 @@ impl<'a> Solver<'a> {
             reference: None,
             config,
             patch_area,
+            back_share,
             element_area,
             element_unshot,
             shot_total: DVec3::ZERO,
@@ -423,7 +437,7 @@ impl<'a> Solver<'a> {
         let factors = self.shoot_all(src, density.as_ref(), &form_factor);
         let mut factors = self.refine(src, factors, shot, density.as_ref(), &form_factor);
         if self.stages.close_rows {
-            self.close_row(src, &mut factors);
+            self.close_row(src, density.as_ref(), &mut factors);
         }
         self.book(src, shot, delta_b, &factors);
         self.repay_overshoot(src, &borrowed);
@@ -432,13 +446,29 @@ impl<'a> Solver<'a> {
     }
 
     /// Scales this shot's form factors so that the receivers get all the power patch `src`
-    /// sends ([`analysis::row_scale`]; only for closed scenes).
-    fn close_row(&self, src: usize, factors: &mut [f32]) {
+    /// sends but the share that lands on the backs of sheets ([`analysis::row_scale`]; only for
+    /// closed scenes).
+    fn close_row(&self, src: usize, density: Option<&SourceDensity>, factors: &mut [f32]) {
         let received: f64 = (self.mesh.elements.iter().zip(&self.element_area))
             .map(|(e, &a)| a * e.v.iter().map(|&v| factors[v as usize] as f64).sum::<f64>() / 3.0)
             .sum();
-        let scale = analysis::row_scale(self.patch_area[src], received) as f32;
+        let target = self.patch_area[src] * (1.0 - self.back_share_of(src, density));
+        let scale = analysis::row_scale(target, received) as f32;
         factors.iter_mut().for_each(|f| *f *= scale);
+    }
+
+    /// The share of a shot from patch `src` that lands on the backs of sheets: its cells'
+    /// shares weighted by the shot's source density (uniform without one).
+    fn back_share_of(&self, src: usize, density: Option<&SourceDensity>) -> f64 {
+        let cells = &self.back_share[src];
+        if cells.is_empty() {
+            return 0.0;
+        }
+        let weight = |i: usize| density.map_or(1.0, |d| f64::from(d.cells()[i]));
+        let (sum, total) = (0..cells.len()).fold((0.0, 0.0), |(s, w), i| {
+            (s + weight(i) * f64::from(cells[i]), w + weight(i))
+        });
+        if total > 0.0 { sum / total } else { 0.0 }
     }
 
     /// Adds the overshoot of patch `src` by the ambient irradiance `ambient`

@@ -51,6 +51,66 @@ fn closed_furnace_box_converges_to_e_over_one_minus_rho() {
     }
 }
 
+#[test]
+fn closed_furnace_room_with_a_block_in_it_converges_to_e_over_one_minus_rho() {
+    // A non-convex closed scene: the unit box with a box standing in the air inside it, faces
+    // outward. Every face emits E = 1 and reflects ρ = 0.8, so B = 5 everywhere; nothing can
+    // escape, so the rows are closed and every shot's power stays in the scene.
+    let rho = 0.8f32;
+    let e = std::f32::consts::FRAC_1_PI;
+    let mut scene = common::closed_box(Vec3::ZERO, Vec3::ONE, rho, |_| e);
+    let block = common::closed_box(
+        Vec3::new(0.3, 0.2, 0.35),
+        Vec3::new(0.6, 0.5, 0.7),
+        rho,
+        |_| e,
+    );
+    let first = scene.objects.len() as u32;
+    for mut o in block.objects {
+        o.name = format!("block {}", o.name);
+        scene.objects.push(o);
+    }
+    for mut t in block.triangles {
+        t.tri = occ_radiosity::geom::Tri::new(t.tri.v[0], t.tri.v[2], t.tri.v[1]);
+        t.object += first;
+        scene.triangles.push(t);
+    }
+    let config = SolverConfig {
+        until: Until::Unshot(1e-5),
+        ..SolverConfig::default()
+    };
+    let mesh = MeshConfig {
+        patch_size: 0.4,
+        element_size: 0.2,
+    };
+    let solver = solve(&scene, mesh, config);
+    assert!(
+        !solver.analysis.convex && solver.analysis.closed && solver.stages.close_rows,
+        "{:?}",
+        solver.analysis
+    );
+    let a = solver.accounts;
+    for c in 0..3 {
+        assert!(a.escaped[c].abs() <= 1e-6 * a.emitted[c], "{a:?}");
+    }
+    let expected = 1.0 / (1.0 - rho as f64);
+    let (mut sum, mut area) = (0.0, 0.0);
+    let areas = solver.object_areas();
+    for (i, (_, b)) in solver.object_means().iter().enumerate() {
+        for c in b.to_array() {
+            assert!(
+                (c / expected - 1.0).abs() < 0.01,
+                "{}: B = {c}, expected {expected}",
+                solver.scene.objects[i].name
+            );
+        }
+        sum += b.x * areas[i];
+        area += areas[i];
+    }
+    assert!((sum / area / expected - 1.0).abs() < 1e-3, "{}", sum / area);
+    assert!(a.balance_error() < 1e-9, "{a:?}");
+}
+
 fn light_patches(solver: &Solver) -> u64 {
     let light = solver
         .scene
