@@ -457,6 +457,12 @@ impl<'a> Solver<'a> {
         factors.iter_mut().for_each(|f| *f *= scale);
     }
 
+    /// The share of each patch's form-factor row that lands on the backs of sheets, per cell
+    /// of its source-density grid (empty: none; [`analysis::back_shares`]).
+    pub fn back_shares(&self) -> &[Vec<f32>] {
+        &self.back_share
+    }
+
     /// The share of a shot from patch `src` that lands on the backs of sheets: its cells'
     /// shares weighted by the shot's source density (uniform without one).
     fn back_share_of(&self, src: usize, density: Option<&SourceDensity>) -> f64 {

@@ -390,6 +390,8 @@ fn capacities(
         ("MAX.ELEMENTS", elements),
         ("MAX.PATCH.ELEMENTS", most_in_one),
         ("MAX.PATCHES", mesh.patches.len()),
+        // the patches' shares of their rows that land on the backs of sheets
+        ("MAX.BACK", solver.back_shares().iter().map(Vec::len).sum()),
         ("MAX.TREE", flat.tree.len()),
         ("MAX.VOXELS", items.count()),
         // a node's voxels: all of them, or its share and cache within --node-memory (in the
@@ -624,8 +626,8 @@ fn host_input(
         Acceleration::Ambient => 1,
         Acceleration::Auto => 2,
     });
-    // Closing each shot's form-factor row where the reference solver does (a closed convex
-    // enclosure: every shot's power lands on its surfaces).
+    // Closing each shot's form-factor row where the reference solver does (a closed scene:
+    // every shot's power lands on its surfaces, or on the backs of sheets).
     w.int(i32::from(solver.stages.close_rows));
     // Casting shadow rays, unless no surface can hide another (a convex enclosure).
     w.int(i32::from(solver.stages.shadow_rays));
@@ -691,11 +693,12 @@ fn host_input(
             w.real32(x);
         }
     }
-    for ((p, &o), u) in mesh
+    for (((p, &o), u), back) in mesh
         .patches
         .iter()
         .zip(&mesh.patch_object)
         .zip(&solver.unshot)
+        .zip(solver.back_shares())
     {
         for v in p.v {
             w.vec3(v);
@@ -706,6 +709,8 @@ fn host_input(
             w.real64(u[c]);
         }
         w.int(o as i32);
+        w.int(back.len() as i32);
+        back.iter().for_each(|&x| w.real32(x));
     }
     for (v, c) in mesh.vertices.iter().zip(corners_at_points(mesh)) {
         w.vec3(v.pos);
