@@ -14,6 +14,8 @@ use occ_radiosity::pathtrace::{PathTraceConfig, PathTracer};
 use occ_radiosity::scene::{self, Scene};
 use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
 
+mod common;
+
 #[test]
 fn a_near_receiver_sees_only_the_lit_part_of_a_half_shadowed_patch() {
     // Issue 10, cause 4. A floor patch (the right triangle x, z in [0, 1], facing up) whose
@@ -80,28 +82,6 @@ fn two_rooms() -> Scene {
     let obj = include_str!("../../scenes/two-rooms.obj");
     let mtl = include_str!("../../scenes/rooms.mtl");
     scene::load_obj("two-rooms.obj", obj, &|_| Ok(mtl.to_string())).expect("scene")
-}
-
-fn solve(scene: &Scene, until: Until) -> Solver<'_> {
-    let mesh = Mesh::from_scene(
-        scene,
-        MeshConfig {
-            patch_size: 1.0,
-            element_size: 0.5,
-        },
-    );
-    let config = SolverConfig {
-        form_factor: FormFactorConfig {
-            rays: 4,
-            offset: 1e-6 * scene.diagonal(),
-            ..FormFactorConfig::default()
-        },
-        until,
-        ..SolverConfig::default()
-    };
-    let mut solver = Solver::new(scene, mesh, config);
-    solver.run(|_, _| {});
-    solver
 }
 
 /// The worst relative difference of any object's mean B (any channel) from `truth`'s.
@@ -176,16 +156,16 @@ fn the_error_rule_reaches_its_target_in_a_room_lit_through_a_door() {
     // that only the stopping rule differs. A fixed unshot fraction of 1% stops with room B
     // several percent short; the error rule stops when every object is within its target.
     let scene = two_rooms();
-    let truth = solve(&scene, Until::Unshot(1e-5));
+    let truth = common::solve_coarse(&scene, Until::Unshot(1e-5));
     let target = 0.01;
-    let by_error = solve(&scene, Until::Error(target));
+    let by_error = common::solve_coarse(&scene, Until::Error(target));
     let (worst, name) = worst_difference(&by_error, &truth);
     assert!(
         worst <= target,
         "error rule: {name} off by {:.2}%",
         worst * 100.0
     );
-    let by_unshot = solve(&scene, Until::Unshot(0.01));
+    let by_unshot = common::solve_coarse(&scene, Until::Unshot(0.01));
     let (worst, name) = worst_difference(&by_unshot, &truth);
     assert!(
         worst > target,

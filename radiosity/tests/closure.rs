@@ -4,10 +4,11 @@
 //! box, open at the front, stays open.
 
 use occ_radiosity::analysis::SceneAnalysis;
-use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::mesh::{Mesh, MeshConfig};
 use occ_radiosity::scene::{self, Scene};
-use occ_radiosity::solver::{Solver, SolverConfig, Until};
+use occ_radiosity::solver::Until;
+
+mod common;
 
 fn load(name: &str, mtl: &str) -> Scene {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/");
@@ -55,24 +56,7 @@ fn the_two_rooms_and_the_table_lamp_are_closed_with_the_lamp_as_their_only_sheet
 /// Solves at coarse settings (patches 1 m, elements 0.5 m, 4 rays, stopped at 1% unshot) and
 /// returns the share of the emitted power booked as escaped, per channel.
 fn escaped_share(scene: &Scene) -> [f64; 3] {
-    let mesh = Mesh::from_scene(
-        scene,
-        MeshConfig {
-            patch_size: 1.0,
-            element_size: 0.5,
-        },
-    );
-    let config = SolverConfig {
-        form_factor: FormFactorConfig {
-            rays: 4,
-            offset: 1e-6 * scene.diagonal(),
-            ..FormFactorConfig::default()
-        },
-        until: Until::Unshot(0.01),
-        ..SolverConfig::default()
-    };
-    let mut solver = Solver::new(scene, mesh, config);
-    solver.run(|_, _| {});
+    let solver = common::solve_coarse(scene, Until::Unshot(0.01));
     assert!(solver.stages.close_rows);
     let a = solver.accounts;
     std::array::from_fn(|c| a.escaped[c] / a.emitted[c])
@@ -136,42 +120,8 @@ fn hung_light(gap: f32) -> (SceneAnalysis, f32) {
 /// The closed 556 x 549 x 559 room, faces inward, ρ = 0.7 (the `+y` face, object 3, is the
 /// ceiling).
 fn common_box() -> Scene {
-    use glam::Vec3;
-    use occ_radiosity::geom::Tri;
-    use occ_radiosity::scene::{Object, SceneTri};
-    let (lo, hi) = (Vec3::ZERO, Vec3::new(556.0, 549.0, 559.0));
-    let mut scene = Scene::default();
-    for (f, name) in ["-x", "+x", "-y", "+y", "-z", "+z"].iter().enumerate() {
-        let (axis, at_hi) = (f / 2, f % 2 == 1);
-        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-        let corner = |a: bool, b: bool| {
-            let mut p = lo;
-            p[axis] = if at_hi { hi[axis] } else { lo[axis] };
-            p[u] = if a { hi[u] } else { lo[u] };
-            p[v] = if b { hi[v] } else { lo[v] };
-            p
-        };
-        let q = [
-            corner(false, false),
-            corner(true, false),
-            corner(true, true),
-            corner(false, true),
-        ];
-        let mut t = [Tri::new(q[0], q[1], q[2]), Tri::new(q[0], q[2], q[3])];
-        if (t[0].normal()[axis] < 0.0) != at_hi {
-            t = [Tri::new(q[0], q[2], q[1]), Tri::new(q[0], q[3], q[2])];
-        }
-        scene.objects.push(Object {
-            name: name.to_string(),
-            reflectance: Vec3::splat(0.7),
-            emission: Vec3::ZERO,
-        });
-        scene.triangles.extend(t.map(|tri| SceneTri {
-            tri,
-            object: f as u32,
-        }));
-    }
-    scene
+    let hi = glam::Vec3::new(556.0, 549.0, 559.0);
+    common::closed_box(glam::Vec3::ZERO, hi, 0.7, |_| 0.0)
 }
 
 #[test]

@@ -2,8 +2,11 @@
 #![allow(dead_code, reason = "each test file uses part of the helpers")]
 
 use glam::Vec3;
+use occ_radiosity::formfactor::FormFactorConfig;
 use occ_radiosity::geom::Tri;
+use occ_radiosity::mesh::{Mesh, MeshConfig};
 use occ_radiosity::scene::{Object, Scene, SceneTri};
+use occ_radiosity::solver::{Solver, SolverConfig, Until};
 
 /// A closed axis-aligned box `lo..hi` with faces facing inward, one object per face, named
 /// `-x +x -y +y -z +z`; `emission(face)` gives each face's Ke.
@@ -80,4 +83,28 @@ pub fn light_over_floor(floor_half: f32) -> Scene {
     scene.triangles.extend(square(0.5, 1.0, false, 0));
     scene.triangles.extend(square(floor_half, 0.0, true, 1));
     scene
+}
+
+/// Solves `scene` at coarse settings (patches 1, elements 0.5, 4 rays per form factor) until
+/// `until`.
+pub fn solve_coarse(scene: &Scene, until: Until) -> Solver<'_> {
+    let mesh = Mesh::from_scene(
+        scene,
+        MeshConfig {
+            patch_size: 1.0,
+            element_size: 0.5,
+        },
+    );
+    let config = SolverConfig {
+        form_factor: FormFactorConfig {
+            rays: 4,
+            offset: 1e-6 * scene.diagonal(),
+            ..FormFactorConfig::default()
+        },
+        until,
+        ..SolverConfig::default()
+    };
+    let mut solver = Solver::new(scene, mesh, config);
+    solver.run(|_, _| {});
+    solver
 }
