@@ -43,7 +43,7 @@ pub const MAX_PLANES: usize = 256;
 pub const MAX_ENCLOSURE_PATCHES: usize = 2048;
 
 /// The winding number of a closed surface around its centre must be 1 within this.
-const WINDING_TOLERANCE: f64 = 1e-4;
+pub const WINDING_TOLERANCE: f64 = 1e-4;
 
 /// What the analysis found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
