@@ -425,7 +425,7 @@ fn carm_refuses_what_it_cannot_do_clearly() {
 /// A shot's report naming more patches than one message holds goes up the tree in parts, each
 /// pulled by the node above, merged as they come: with parts of three patches (carm.occ and its
 /// includes copied, `PART.PATCHES` set to 3) the solution is the embedded program's to the bit,
-/// on 4 and 13 nodes, the voxels replicated or spread.
+/// on 4 and 13 nodes, the voxels replicated or spread, with adaptive subdivision or without.
 #[test]
 fn carm_reports_in_parts_give_the_same_solution() {
     let programs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../programs");
@@ -453,6 +453,7 @@ fn carm_reports_in_parts_give_the_same_solution() {
         ("cornell-4", SETTINGS.to_vec(), "4"),
         ("cornell-13", SETTINGS.to_vec(), "13"),
         ("lamp-spread-4", [&lamp[..], &spread[..]].concat(), "4"),
+        ("cornell-adaptive-4", ADAPTIVE.to_vec(), "4"),
     ] {
         let carm = ["--solver", "carm", "--nodes", nodes, "--threads", "1"];
         let whole = solve(

@@ -419,6 +419,8 @@ fn capacities(
                 },
         ),
         ("MAX.OBJECTS", solver.scene.objects.len()),
+        // the nodes the controller deals points and corners to, a message's worth each
+        ("DEAL.NODES", settings.nodes),
         // a part of a shot's report (3 a patch) with room for the candidates' elements, a
         // gather's (3 an element of one patch), a refining shot's (a row of 5 a sample point)
         (
