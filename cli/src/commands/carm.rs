@@ -377,7 +377,8 @@ fn capacities(
     let growth = points - mesh.vertices.len();
     let round = |n: usize| if growth > 0 { n * MAX_PROBES } else { 0 };
     let elements = mesh.elements.len() + 2 * growth + round(2);
-    let most_in_one = most_elements_of_one_patch(mesh) + 2 * growth;
+    let most_at_first = most_elements_of_one_patch(mesh);
+    let most_in_one = most_at_first + 2 * growth;
     let mut capacities = vec![
         ("MAX.POINTS", points),
         // adaptive subdivision's arrays at the root: none when it can add no point
@@ -425,10 +426,9 @@ fn capacities(
         // gather's (3 an element of one patch), a refining shot's (a row of 5 a sample point)
         (
             "MAX.REPORT",
-            (3 * mesh.patches.len().min(PART_PATCHES)
-                + 3 * CANDIDATES * most_elements_of_one_patch(mesh))
-            .max(3 * most_in_one)
-            .max(if growth > 0 { 5 * points } else { 0 }),
+            (3 * mesh.patches.len().min(PART_PATCHES) + 3 * CANDIDATES * most_at_first)
+                .max(3 * most_in_one)
+                .max(if growth > 0 { 5 * points } else { 0 }),
         ),
     ];
     if let Some(named) = &items.named {
