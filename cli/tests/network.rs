@@ -146,6 +146,34 @@ fn a_node_over_its_memory_budget_is_named() {
     assert!(err.contains("65536"), "names the budget: {err}");
 }
 
+/// A large array is taken from a node's memory when its declaration runs: the node that never
+/// declares it takes none of it, though every node runs the same program with the same frame.
+#[test]
+fn a_node_takes_only_the_large_arrays_it_declares() {
+    let dir = std::env::temp_dir().join(format!("occ-vec-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("vec.occ");
+    std::fs::write(
+        &file,
+        "PROC main (CHAN BYTE keyboard?, screen!, error!)\n  PLACED PAR\n    PROCESSOR 0\n      \
+         SKIP\n    PROCESSOR 7\n      [100000]INT table:\n      SEQ i = 0 FOR 100000\n        \
+         table[i] := i\n:\n",
+    )
+    .expect("write test program");
+    let o = occ_run(&file, &["--stats"]);
+    let out = text(&o.stdout) + &text(&o.stderr);
+    assert!(o.status.success(), "{out}");
+    let peak = |node: &str| -> u64 {
+        out.lines()
+            .find(|l| l.starts_with(node))
+            .and_then(|l| l.split_whitespace().last())
+            .and_then(|w| w.parse().ok())
+            .unwrap_or_else(|| panic!("no peak for {node}: {out}"))
+    };
+    assert!(peak("PROCESSOR 0") < 4096, "{out}");
+    assert!(peak("PROCESSOR 7") >= 400_000, "{out}");
+}
+
 /// Settings that cannot work are refused with a reason naming the setting.
 #[test]
 fn bad_settings_are_refused() {

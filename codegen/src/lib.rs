@@ -43,6 +43,9 @@ pub struct Compiled {
     pub entry_name: String,
     /// Words of workspace the entry PROC needs above Wptr.
     pub entry_words: u32,
+    /// The most bytes of vectors (large arrays, taken from node memory as their declarations
+    /// run: `frame::VECTOR_BYTES`) the entry PROC can hold at once.
+    pub entry_vectors: i64,
     /// Byte offsets of the entry PROC's channel parameters in its frame.
     pub entry_params: Vec<i32>,
     /// Every parameter of the entry PROC: byte offset, passed by value, type.
@@ -210,7 +213,8 @@ pub fn compile_keeping(
         _data: data,
         entry: entry_fn,
         entry_name: name.text.clone(),
-        entry_words: e.frame_words,
+        entry_words: e.size.words,
+        entry_vectors: e.size.vectors,
         entry_params: if host_entry {
             e.params.iter().map(|p| p.0).collect()
         } else {

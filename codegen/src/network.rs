@@ -436,15 +436,17 @@ impl Compiled {
         }))
     }
 
-    /// The bytes of workspace [`Compiled::run_topology`] takes on each node before the program
-    /// starts: the entry PROC's frame, which holds every process it runs (workspaces are
-    /// static), and the node's link channel words, each with its header. A node's memory
-    /// budget below it fails at the start.
+    /// The most bytes of memory [`Compiled::run_topology`] can take on a node: the entry
+    /// PROC's frame, which holds every process it runs (workspaces are static), the node's link
+    /// channel words, each with its header, and the most bytes of large arrays its processes
+    /// can hold at once (taken as their declarations run, so a node whose processes do not
+    /// declare them takes less). A node's memory budget below the frame and links fails at the
+    /// start, below the rest when a declaration finds too little left.
     pub fn topology_node_bytes(&self) -> usize {
         let header = abi::slot::HEADER_WORDS;
         let frame = self.entry_words as usize + abi::frame::ENTRY_SPARE_WORDS + header;
         let links = 2 * LINKS + header;
-        (frame + links) * WORD_BYTES as usize
+        (frame + links) * WORD_BYTES as usize + usize::try_from(self.entry_vectors).unwrap_or(0)
     }
 
     /// Runs the program's last PROC once per node of `shape`. It must take

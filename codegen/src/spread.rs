@@ -83,6 +83,7 @@ pub(crate) fn merge(blobs: &[Vec<u8>]) -> (Vec<NodeOutcome>, Vec<LinkStats>) {
                     code: ErrorKind::Stopped as i64,
                     location: None,
                     proc_name: None,
+                    detail: None,
                 })),
                 _ => Err(RunError::Remote(r.string())),
             };

@@ -434,6 +434,13 @@ entries! {
     /// node's address base lie in one of its workspace chunks, else 0 (the check an `ASM`
     /// address outside [`ADDR_LIMITS_OFFSET`]'s first chunk falls back to).
     AddrOk = "rt_addr_ok", false, [Ptr, W, W] -> W;
+    /// `rt_vector_get(node, ws, bytes, at, location) -> Status`: takes `bytes` for a large
+    /// array from the node's memory and stores their address at `at`; when the budget has not
+    /// that much left, halts the node with [`crate::ErrorKind::Memory`] at `location`.
+    VectorGet = "rt_vector_get", true, [Ptr, Ptr, W, Ptr, W] -> St;
+    /// `rt_vector_free(node, address, bytes) -> Word`: gives back what `rt_vector_get` took for
+    /// `bytes` at `address`; returns 0.
+    VectorFree = "rt_vector_free", false, [Ptr, Ptr, W] -> W;
 }
 
 #[cfg(test)]

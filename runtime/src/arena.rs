@@ -142,6 +142,66 @@ pub(crate) unsafe extern "C" fn rt_addr_ok(
     Word::from(unsafe { (*node).arena.holds(offset, bytes) })
 }
 
+/// The words above Wptr of a vector of `bytes`.
+fn vector_words(bytes: Word) -> usize {
+    usize::try_from(bytes)
+        .unwrap_or(0)
+        .div_ceil(size_of::<Word>())
+}
+
+/// `rt_vector_get(node, ws, bytes, at, location)`: see [`crate::abi::Entry::VectorGet`].
+///
+/// # Safety
+/// `node` is the running node, `ws` its running frame and `at` a word of it.
+pub(crate) unsafe extern "C" fn rt_vector_get(
+    node: *mut crate::Node,
+    ws: Wptr,
+    bytes: Word,
+    at: *mut Word,
+    location: Word,
+) -> crate::abi::Status {
+    // SAFETY: caller contract.
+    let n = unsafe { &mut *node };
+    match n.alloc_workspace(vector_words(bytes)) {
+        Ok(v) => {
+            // SAFETY: `at` is a word of the running frame.
+            unsafe { *at = v as Word };
+            crate::abi::Status::DONE
+        }
+        Err(_) => {
+            let detail = format!(
+                "{bytes} bytes asked for, {} left of the node's budget of {} bytes",
+                n.arena.budget - n.arena.in_use,
+                n.arena.budget
+            );
+            // SAFETY: caller contract (the frame's CODE slot names its function).
+            let st = unsafe {
+                crate::error::rt_error(node, ws, crate::ErrorKind::Memory as Word, location)
+            };
+            // SAFETY: caller contract; `rt_error` has just set the halt.
+            if let Some(h) = unsafe { &mut (*node).halt } {
+                h.detail = Some(detail);
+            }
+            st
+        }
+    }
+}
+
+/// `rt_vector_free(node, address, bytes)`: see [`crate::abi::Entry::VectorFree`].
+///
+/// # Safety
+/// `node` is the running node; `address` came from its `rt_vector_get` of `bytes`, and its
+/// array's scope has ended.
+pub(crate) unsafe extern "C" fn rt_vector_free(
+    node: *mut crate::Node,
+    address: Wptr,
+    bytes: Word,
+) -> Word {
+    // SAFETY: caller contract.
+    unsafe { (*node).free_workspace(address, vector_words(bytes)) };
+    0
+}
+
 #[cfg(test)]
 mod test {
     use super::*;

@@ -5,7 +5,7 @@ use crate::alt::{
     rt_alt, rt_altend, rt_altwt, rt_disc, rt_diss, rt_dist, rt_enbc, rt_enbs, rt_enbt, rt_talt,
     rt_taltwt,
 };
-use crate::arena::rt_addr_ok;
+use crate::arena::{rt_addr_ok, rt_vector_free, rt_vector_get};
 use crate::chan::{rt_in, rt_out, rt_preempt, rt_xend, rt_xin, rt_xwait};
 use crate::error::rt_error;
 use crate::par::{rt_endp, rt_par_wait, rt_startp, rt_startp_pri, rt_stopp};
@@ -45,6 +45,8 @@ pub fn address(e: Entry) -> *const u8 {
         Entry::Xin => rt_xin as *const u8,
         Entry::Xend => rt_xend as *const u8,
         Entry::AddrOk => rt_addr_ok as *const u8,
+        Entry::VectorGet => rt_vector_get as *const u8,
+        Entry::VectorFree => rt_vector_free as *const u8,
     }
 }
 

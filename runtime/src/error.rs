@@ -52,13 +52,16 @@ pub enum ErrorKind {
     /// address base, which an INT (32 bits) cannot hold (see [`crate::abi::ADDR_BASE_OFFSET`]),
     /// or reads or writes through an address outside the node's memory.
     AddressRange = 15,
+    /// Occurs when a large array's declaration (a vector, taken from the node's memory as the
+    /// declaration runs) needs more than the node's memory budget has left.
+    Memory = 16,
 }
 
 impl ErrorKind {
     /// The kind with code `code`.
     pub fn from_code(code: Word) -> Option<ErrorKind> {
         use ErrorKind::*;
-        const ALL: [ErrorKind; 16] = [
+        const ALL: [ErrorKind; 17] = [
             Stop,
             IfNoBranch,
             CaseNoMatch,
@@ -75,6 +78,7 @@ impl ErrorKind {
             Floating,
             ReplicatorCount,
             AddressRange,
+            Memory,
         ];
         usize::try_from(code).ok().and_then(|i| ALL.get(i).copied())
     }
@@ -100,6 +104,10 @@ impl ErrorKind {
             ErrorKind::Floating => "floating-point error: REAL division by zero",
             ErrorKind::ReplicatorCount => "negative replicator count",
             ErrorKind::AddressRange => "ASM address out of range: outside the node's memory",
+            ErrorKind::Memory => {
+                "out of memory: an array's declaration needs more than the node's memory budget \
+                 has left"
+            }
         }
     }
 }
@@ -115,6 +123,8 @@ pub struct Halt {
     pub location: Option<SourceLoc>,
     /// In which PROC, if its code was registered.
     pub proc_name: Option<String>,
+    /// What the kind alone does not say (how much memory was asked for and left).
+    pub detail: Option<String>,
 }
 
 impl fmt::Display for Halt {
@@ -125,6 +135,9 @@ impl fmt::Display for Halt {
         match self.kind {
             Some(k) => write!(f, "runtime error: {}", k.describe())?,
             None => write!(f, "runtime error: unknown kind {}", self.code)?,
+        }
+        if let Some(d) = &self.detail {
+            write!(f, ": {d}")?;
         }
         if let Some(p) = &self.proc_name {
             write!(f, " (in PROC {p})")?;
@@ -195,6 +208,7 @@ pub unsafe extern "C" fn rt_error(node: *mut Node, ws: Wptr, kind: Word, locatio
             .and_then(|l| program.location(l))
             .cloned(),
         proc_name: program.proc_by_code(code).map(|p| p.name.clone()),
+        detail: None,
     });
     Status::HALTED
 }

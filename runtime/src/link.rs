@@ -515,6 +515,7 @@ impl Node {
             code: ErrorKind::Stopped as Word,
             location: None,
             proc_name: None,
+            detail: None,
         }
     }
 }

@@ -63,7 +63,7 @@ impl<'p> Compiler<'p> {
         let (id, words) = r?;
         let entry = ProcEntry {
             id,
-            frame_words: words,
+            size: words,
             depth,
             params: slots,
             param_types: types,
@@ -119,7 +119,7 @@ impl Tr<'_, '_> {
         stores: Vec<(i32, Vec<Value>)>,
         span: Span,
     ) -> Res<()> {
-        let cw_off = self.frame.sub_workspace(entry.frame_words);
+        let cw_off = self.frame.sub_workspace(entry.size);
         let cw = self.local_addr(cw_off);
         self.store_actuals(entry, cw, stores);
         let zero = self.iconst(0);

@@ -5,10 +5,11 @@ use cranelift_codegen::ir::{InstBuilder, types};
 use occ_compiler::checked::SymbolKind;
 use occ_compiler::types::Type;
 use occ_grammar::ast::{AbbrevMode, Decl, DeclKind, Expr, ExprKind, Name};
-use occ_runtime::abi::word_offset;
+use occ_runtime::abi::{Entry, word_offset};
 
 use super::{Loc, Res, Storage, Tr, mem};
-use crate::layout::{WORD, is_scalar, rank, size_of};
+use crate::frame::{VECTOR_BYTES, vector_cost};
+use crate::layout::{WORD, base_elem, is_scalar, rank, resolve, size_of, static_dims};
 
 impl Tr<'_, '_> {
     /// Lowers declaration `d`: allocates and binds its names.
@@ -174,6 +175,67 @@ impl Tr<'_, '_> {
             }
         }
         Ok(())
+    }
+
+    /// Lowers a declaration of a scope (`decl:` before a process): as [`Self::decl`], but a
+    /// variable of a data array of [`VECTOR_BYTES`] or more is a vector, taken from the node's
+    /// memory here and given back by [`Self::free_vectors`] when the scope ends.
+    pub fn scope_decl(&mut self, d: &Decl) -> Res<()> {
+        let DeclKind::Var { names, .. } = &d.kind else {
+            return self.decl(d);
+        };
+        for n in names {
+            let sym = self.cx.symbol(n)?;
+            let ty = resolve(&self.cx.checked.types, &self.cx.checked.symbols[sym].ty);
+            let data = !matches!(
+                base_elem(&ty),
+                Type::Chan(..) | Type::Timer | Type::Port(_) | Type::Error
+            );
+            match size_of(&self.cx.checked.types, &ty) {
+                Some(bytes) if data && bytes >= VECTOR_BYTES && self.in_expr == 0 => {
+                    self.vector(sym, &ty, bytes, n.span)?;
+                }
+                _ => self.var(n)?,
+            }
+        }
+        Ok(())
+    }
+
+    /// Binds `sym`, an array of `bytes`, to memory taken from the node as this runs.
+    fn vector(
+        &mut self,
+        sym: occ_compiler::checked::SymbolId,
+        ty: &Type,
+        bytes: i64,
+        span: occ_grammar::ast::Span,
+    ) -> Res<()> {
+        let dims = static_dims(ty);
+        let off = self.frame.alloc_words(1 + dims.len());
+        let a = self.local_addr(off);
+        for (i, n) in dims.iter().enumerate() {
+            let n = self.iconst(i64::from(n.unwrap_or(0)));
+            self.b.ins().store(mem(), n, a, word_offset(i as isize + 1));
+        }
+        let loc = self.cx.location(span);
+        let (size, loc) = (self.iconst(bytes), self.iconst(i64::from(loc)));
+        self.blocking(Entry::VectorGet, &[self.node, self.ws, size, a, loc], span)?;
+        self.frame.hold_vectors(vector_cost(bytes));
+        self.vectors.push((off, bytes));
+        self.bind(sym, off, true);
+        Ok(())
+    }
+
+    /// Gives back the vectors of the scopes opened since `open` vectors were held.
+    pub fn free_vectors(&mut self, open: usize) {
+        while self.vectors.len() > open {
+            let Some((off, bytes)) = self.vectors.pop() else {
+                break;
+            };
+            let a = self.local_addr(off);
+            let v = self.b.ins().load(types::I64, mem(), a, 0);
+            let size = self.iconst(bytes);
+            self.call_rt(Entry::VectorFree, &[self.node, v, size]);
+        }
     }
 
     fn alloc_var(&mut self, ty: &Type, name: &Name) -> Res<i32> {

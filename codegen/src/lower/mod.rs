@@ -40,7 +40,7 @@ use occ_runtime::abi::{Entry, Status, slot, word_offset};
 use occ_runtime::program::{ChannelName, ProgramInfo};
 
 use crate::error::CodegenError;
-use crate::frame::{FIRST_LOCAL, Frame};
+use crate::frame::{FIRST_LOCAL, Frame, Size};
 use crate::jit::Jit;
 
 pub use place::Loc;
@@ -89,8 +89,8 @@ pub enum Storage {
 pub struct ProcEntry {
     /// The compiled function.
     pub id: FuncId,
-    /// Words above Wptr its frame needs (including its callees).
-    pub frame_words: u32,
+    /// Words above Wptr its frame needs and the most vectors it holds (including its callees).
+    pub size: Size,
     /// Lexical depth of its body (its static link is the frame at `depth - 1`).
     pub depth: u32,
     /// Byte offset of each parameter's slot in its frame, and whether it is passed by value.
@@ -243,7 +243,7 @@ impl<'p> Compiler<'p> {
     }
 
     /// Compiles one resumable function at lexical `depth`; `body` lowers its code and must end
-    /// the current block with a return. Returns the function and its frame size in words.
+    /// the current block with a return. Returns the function and its size.
     pub fn function(
         &mut self,
         name: &str,
@@ -251,7 +251,7 @@ impl<'p> Compiler<'p> {
         frame: Frame,
         span: Span,
         body: impl FnOnce(&mut Tr<'_, 'p>) -> Res<()>,
-    ) -> Res<(FuncId, u32)> {
+    ) -> Res<(FuncId, Size)> {
         let id = self.jit.declare(&name.replace('.', "_"))?;
         let mut fc = self.jit.take_context();
         fc.ctx.func.signature = self.jit.proc_signature();
@@ -285,13 +285,14 @@ impl<'p> Compiler<'p> {
                 held: None,
                 channels: Vec::new(),
                 asm_area: None,
+                vectors: Vec::new(),
             };
             tr.reserve_asm_area(span);
             let r = body(&mut tr);
             r.map(|()| tr.finish(dispatch))
         };
         match built {
-            Ok((words, resumes, channels)) => {
+            Ok((size, resumes, channels)) => {
                 self.jit.define(id, fc)?;
                 let shown = if self.proc_name.is_empty() {
                     name.to_string()
@@ -299,7 +300,7 @@ impl<'p> Compiler<'p> {
                     self.proc_name.clone()
                 };
                 self.funcs.push((id, shown, resumes, channels));
-                Ok((id, words))
+                Ok((id, size))
             }
             Err(e) => {
                 self.jit.module.clear_context(&mut fc.ctx);
@@ -339,6 +340,9 @@ pub struct Tr<'a, 'p> {
     /// The workspace area of the function's `ASM` blocks: the byte offset of their Wptr and
     /// the 32-bit words reserved below and above it.
     pub asm_area: Option<(i32, u32, u32)>,
+    /// The vectors of the scopes open at this point: the frame offset of each one's address
+    /// word and its bytes (see [`crate::frame::VECTOR_BYTES`]).
+    pub vectors: Vec<(i32, i64)>,
 }
 
 /// Memory flags for workspace data (not necessarily aligned).
@@ -350,7 +354,7 @@ pub fn mem() -> MemFlagsData {
 
 impl<'p> Tr<'_, 'p> {
     /// Emits the entry dispatch and the exit block, and finishes the function.
-    fn finish(mut self, dispatch: Block) -> (u32, Vec<u32>, Vec<ChannelName>) {
+    fn finish(mut self, dispatch: Block) -> (Size, Vec<u32>, Vec<ChannelName>) {
         self.b.switch_to_block(self.exit);
         let st = self.b.block_params(self.exit)[0];
         self.b.ins().return_(&[st]);
@@ -369,7 +373,7 @@ impl<'p> Tr<'_, 'p> {
         let cfg = self.cx.jit.module_target_config();
         self.b.finalize(cfg);
         (
-            self.frame.words(),
+            self.frame.size(),
             self.resumes.iter().map(|r| r.1).collect(),
             self.channels,
         )

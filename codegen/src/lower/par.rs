@@ -9,11 +9,11 @@ use occ_runtime::abi::{Entry, WORD_BYTES, frame, join, priority, word_offset};
 use occ_grammar::ast::{Expr, ExprKind, ProcessKind};
 
 use super::{ProcEntry, Res, Storage, Tr, mem};
-use crate::frame::{FIRST_LOCAL, Frame, HEADER_BYTES};
+use crate::frame::{FIRST_LOCAL, Frame, HEADER_BYTES, Size};
 
 /// A PAR branch: its own function, or a PROC started directly (the branch is one call).
 enum Branch<'a> {
-    Func(FuncId, u32),
+    Func(FuncId, Size),
     Direct(ProcEntry, &'a [Expr]),
 }
 
@@ -45,13 +45,13 @@ impl Tr<'_, '_> {
         if let Some((e, args)) = self.direct(p) {
             return Ok(Branch::Direct(e, args));
         }
-        let (id, words) = self.branch(p, repl)?;
-        Ok(Branch::Func(id, words))
+        let (id, size) = self.branch(p, repl)?;
+        Ok(Branch::Func(id, size))
     }
 
     /// Compiles one PAR branch as a function at depth `self.depth + 1`; with a replicator, the
-    /// index is the branch's first local. Returns the function and its frame words.
-    fn branch(&mut self, body: &Process, repl: Option<&Replicator>) -> Res<(FuncId, u32)> {
+    /// index is the branch's first local. Returns the function and its size.
+    fn branch(&mut self, body: &Process, repl: Option<&Replicator>) -> Res<(FuncId, Size)> {
         // The parent stores its own frame as the branch's static link (`prepare_func`).
         let depth = self.depth + 1;
         let mut frame = Frame::default();
@@ -145,13 +145,15 @@ impl Tr<'_, '_> {
         let mut branches = Vec::new();
         for p in body {
             let b = self.make_branch(p, None)?;
-            let words = match &b {
-                Branch::Func(_, w) => *w,
-                Branch::Direct(e, _) => e.frame_words,
+            let size = match &b {
+                Branch::Func(_, s) => *s,
+                Branch::Direct(e, _) => e.size,
             };
+            // The branches run at once: their frames side by side, their vectors together.
+            self.frame.hold_vectors(size.vectors);
             let at = self
                 .frame
-                .alloc(i64::from(HEADER_BYTES) + i64::from(WORD_BYTES) * i64::from(words));
+                .alloc(i64::from(HEADER_BYTES) + i64::from(WORD_BYTES) * i64::from(size.words));
             branches.push((b, at + HEADER_BYTES));
         }
         for (i, (b, wptr)) in branches.into_iter().enumerate() {
@@ -182,11 +184,13 @@ impl Tr<'_, '_> {
             }
         };
         let br = self.make_branch(p, Some(r))?;
-        let words = match &br {
-            Branch::Func(_, w) => *w,
-            Branch::Direct(e, _) => e.frame_words,
+        let size = match &br {
+            Branch::Func(_, s) => *s,
+            Branch::Direct(e, _) => e.size,
         };
-        let stride = i64::from(HEADER_BYTES) + i64::from(WORD_BYTES) * i64::from(words);
+        self.frame
+            .hold_vectors(size.vectors.saturating_mul(count.max(1)));
+        let stride = i64::from(HEADER_BYTES) + i64::from(WORD_BYTES) * i64::from(size.words);
         let area = self.frame.alloc(stride * count.max(1));
         let (k_off, base_off, step_off) = (
             self.frame.alloc_word(),

@@ -32,10 +32,13 @@ impl Tr<'_, '_> {
                 Ok(())
             }
             ProcessKind::Scope { decls, body } => {
+                let open = self.vectors.len();
                 for d in decls {
-                    self.decl(d)?;
+                    self.scope_decl(d)?;
                 }
-                self.process(body)
+                self.process(body)?;
+                self.free_vectors(open);
+                Ok(())
             }
             ProcessKind::Assign { lhs, rhs } => self.assign(lhs, rhs, p.span),
             ProcessKind::Output { chan, items } => self.output(chan, items, p.span),

@@ -43,7 +43,7 @@ fn runtime_error_names_file_line_kind_and_proc() {
 
 #[test]
 fn every_error_kind_has_a_code_and_message() {
-    for code in 0..16 {
+    for code in 0..17 {
         let k = ErrorKind::from_code(code).expect("kind");
         assert_eq!(k as Word, code);
         assert!(!k.describe().is_empty());
@@ -62,6 +62,7 @@ fn every_error_kind_has_a_code_and_message() {
         (ErrorKind::Floating, "floating-point"),
         (ErrorKind::ReplicatorCount, "replicator count"),
         (ErrorKind::AddressRange, "address out of range"),
+        (ErrorKind::Memory, "out of memory"),
     ] {
         assert!(k.describe().to_lowercase().contains(word), "{k:?}");
     }
@@ -69,7 +70,8 @@ fn every_error_kind_has_a_code_and_message() {
     assert_eq!(ErrorKind::from_code(13), Some(ErrorKind::Floating));
     assert_eq!(ErrorKind::from_code(14), Some(ErrorKind::ReplicatorCount));
     assert_eq!(ErrorKind::from_code(15), Some(ErrorKind::AddressRange));
-    assert_eq!(ErrorKind::from_code(16), None);
+    assert_eq!(ErrorKind::from_code(16), Some(ErrorKind::Memory));
+    assert_eq!(ErrorKind::from_code(17), None);
     assert_eq!(ErrorKind::from_code(-1), None);
 }
 
