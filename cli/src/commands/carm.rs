@@ -1435,7 +1435,7 @@ impl Pipe {
         self.0
             .lock()
             .unwrap_or_else(|e| e.into_inner())
-            .extend(b.iter().copied());
+            .extend(b);
     }
 }
 
@@ -1453,12 +1453,12 @@ impl Read for Keyboard {
         if n > 0 || buf.is_empty() {
             return Ok(n);
         }
-        let mut more = self.more.0.lock().unwrap_or_else(|e| e.into_inner());
-        let n = buf.len().min(more.len());
-        for (slot, b) in buf.iter_mut().zip(more.drain(..n)) {
-            *slot = b;
-        }
-        Ok(n)
+        // VecDeque's Read copies whole slices
+        self.more
+            .0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .read(buf)
     }
 }
 
