@@ -115,6 +115,10 @@ pub struct CarmSettings {
     /// A node holds at most this many times its even share of the sample points (and of their
     /// element corners); a point whose hash names a full node is re-hashed to another.
     pub load_tolerance: f64,
+    /// Worker tasks a node runs at high priority (`--tasks`, at least 1).
+    pub tasks: usize,
+    /// Worker threads a node runs at low priority (`--worker-threads`).
+    pub worker_threads: usize,
     /// The voxels spread over the nodes (`--node-memory`, `--cache`); `None`: every voxel on
     /// every node.
     pub memory: Option<Memory>,
@@ -131,6 +135,10 @@ pub struct Memory {
     /// The backing store file the host writes and serves voxel reads from.
     pub store: PathBuf,
 }
+
+/// The most worker tasks and threads a node runs together: each holds its batch's scratch
+/// (about 0.8 MB), and its parked batch is kept by the database manager (as much again).
+const MOST_WALKERS: usize = 16;
 
 /// The default [`CarmSettings::load_tolerance`].
 pub const LOAD_TOLERANCE: f64 = 1.25;
@@ -360,6 +368,14 @@ fn capacities(
     items: &Items,
     settings: &CarmSettings,
 ) -> anyhow::Result<Vec<(&'static str, usize)>> {
+    anyhow::ensure!(
+        (1..=MOST_WALKERS).contains(&settings.tasks)
+            && settings.tasks + settings.worker_threads <= MOST_WALKERS,
+        "--tasks {} --worker-threads {}: a node runs 1 to {MOST_WALKERS} tasks, and at most \
+         {MOST_WALKERS} tasks and threads together",
+        settings.tasks,
+        settings.worker_threads
+    );
     let tolerance = settings.load_tolerance;
     anyhow::ensure!(
         tolerance.is_finite() && tolerance >= 1.0,
@@ -420,6 +436,8 @@ fn capacities(
                 },
         ),
         ("MAX.OBJECTS", solver.scene.objects.len()),
+        ("TASKS", settings.tasks),
+        ("THREADS", settings.worker_threads),
         // the nodes the controller deals points and corners to, a message's worth each
         ("DEAL.NODES", settings.nodes),
         // a part of a shot's report (3 a patch) with room for the candidates' elements, a
@@ -448,9 +466,10 @@ fn capacities(
             ("MAX.TRI.CACHE", triangles),
         ]);
     }
+    // every array holds at least one element; a node may run no worker threads
     Ok(capacities
         .into_iter()
-        .map(|(name, n)| (name, n.max(1)))
+        .map(|(name, n)| (name, if name == "THREADS" { n } else { n.max(1) }))
         .collect())
 }
 
@@ -1432,10 +1451,7 @@ struct Pipe(Arc<Mutex<VecDeque<u8>>>);
 
 impl Pipe {
     fn push(&self, b: &[u8]) {
-        self.0
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .extend(b);
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).extend(b);
     }
 }
 

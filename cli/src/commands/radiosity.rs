@@ -96,6 +96,15 @@ pub struct Args {
     /// points (and of their element corners); a point whose hash names a full node is re-hashed.
     #[arg(long, value_name = "F", default_value_t = carm::LOAD_TOLERANCE)]
     pub load_tolerance: f64,
+    /// `--solver carm`: worker tasks a node runs at high priority (the paper's worker
+    /// processes); each takes receivers in turn and has the node's database manager walk their
+    /// shadow rays, and while one waits for voxels from other nodes the others go on.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub tasks: usize,
+    /// `--solver carm`: worker threads a node runs at low priority, beside its tasks: they use
+    /// the processor while every task waits for voxels.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub worker_threads: usize,
     /// Where carm.occ's nodes run: inproc (this process) or mpi (spread over the ranks of
     /// `mpirun`, rank 0 playing the host and writing the outputs; needs a build with
     /// --features mpi).
@@ -355,6 +364,8 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                 threads,
                 program,
                 load_tolerance: args.load_tolerance,
+                tasks: args.tasks,
+                worker_threads: args.worker_threads,
                 memory: args
                     .node_memory
                     .zip(args.cache)
