@@ -353,7 +353,8 @@ pub fn solve(
 /// The values of carm.occ's capacities (`VAL INT NAME IS n:` in its capacities block) for
 /// `solver`'s scene on `settings.nodes` nodes: the scene's counts, and per node its share of the
 /// sample points and of their element corners times the load tolerance (with room for one
-/// more point's corners), beyond which the controller re-hashes a point to another node.
+/// more point's corners), beyond which the controller re-hashes a point to another node, and
+/// the most patches a node has corners of (`node_patches`).
 fn capacities(
     solver: &Solver,
     flat: &FlatOctree,
