@@ -361,7 +361,8 @@ pub fn solve(
 /// The values of carm.occ's capacities (`VAL INT NAME IS n:` in its capacities block) for
 /// `solver`'s scene on `settings.nodes` nodes: the scene's counts, and per node its share of the
 /// sample points and of their element corners times the load tolerance (with room for one
-/// more point's corners), beyond which the controller re-hashes a point to another node.
+/// more point's corners), beyond which the controller re-hashes a point to another node, and
+/// the most patches a node has corners of (`node_patches`).
 fn capacities(
     solver: &Solver,
     flat: &FlatOctree,
@@ -395,14 +396,17 @@ fn capacities(
     let elements = mesh.elements.len() + 2 * growth + round(2);
     let most_at_first = most_elements_of_one_patch(mesh);
     let most_in_one = most_at_first + 2 * growth;
+    let node_points = share(points).min(points);
+    let node_corners = share(3 * mesh.elements.len() + 10 * growth) + most_at_one + round(10);
     let mut capacities = vec![
         ("MAX.POINTS", points),
         // adaptive subdivision's arrays at the root: none when it can add no point
         ("MAX.REFINE.POINTS", if growth > 0 { points } else { 1 }),
-        ("NODE.POINTS", share(points).min(points)),
+        ("NODE.POINTS", node_points),
+        ("NODE.CORNERS", node_corners),
         (
-            "NODE.CORNERS",
-            share(3 * mesh.elements.len() + 10 * growth) + most_at_one + round(10),
+            "NODE.PATCHES",
+            node_patches(mesh, settings.nodes, node_points, node_corners, growth > 0),
         ),
         ("MAX.ELEMENTS", elements),
         ("MAX.PATCH.ELEMENTS", most_in_one),
@@ -471,6 +475,108 @@ fn capacities(
         .into_iter()
         .map(|(name, n)| (name, if name == "THREADS" { n } else { n.max(1) }))
         .collect())
+}
+
+/// The most patches a node has element corners of, as the controller deals the sample points
+/// (`deal`), and with adaptive subdivision the most it can come to: a split brings a node a
+/// patch new to it only through the new point's two corners (x, y and c are corners of the
+/// element already), so a node with `c` corners of `p` patches at the start has at most
+/// `p + (node_corners - c) / 2` of them (the controller keeps every node within
+/// `node_corners`). Never more than the scene's patches; all of them when no node has room
+/// for some point (the controller stops the run then).
+fn node_patches(
+    mesh: &Mesh,
+    nodes: usize,
+    node_points: usize,
+    node_corners: usize,
+    adapt: bool,
+) -> usize {
+    let all = mesh.patches.len();
+    let Some(dealt) = deal(mesh, nodes, node_points, node_corners) else {
+        return all;
+    };
+    // The elements go grouped by patch (host_input), so a node's patches come one after another.
+    let mut by_patch: Vec<usize> = (0..mesh.elements.len()).collect();
+    by_patch.sort_by_key(|&e| mesh.elements[e].patch);
+    let mut patches = vec![0usize; nodes];
+    let mut last = vec![u32::MAX; nodes];
+    for e in by_patch.iter().map(|&e| &mesh.elements[e]) {
+        for v in e.v {
+            let k = dealt.node[v as usize];
+            if last[k] != e.patch {
+                last[k] = e.patch;
+                patches[k] += 1;
+            }
+        }
+    }
+    // the room adaptive subdivision may fill on node k
+    let room = |k: usize| {
+        if adapt {
+            node_corners.saturating_sub(dealt.corners[k]) / 2
+        } else {
+            0
+        }
+    };
+    let most = (0..nodes).map(|k| patches[k] + room(k)).max().unwrap_or(0);
+    most.min(all)
+}
+
+/// Where the controller's `place` (carm-common.inc) deals each sample point, and the corners
+/// each node then holds.
+struct Dealt {
+    /// The node of each sample point.
+    node: Vec<usize>,
+    /// The element corners at each node's points.
+    corners: Vec<usize>,
+}
+
+/// The controller's dealing of the mesh's sample points, in order: each to its hash's node
+/// (`owner`), unless that node is full (`node_points` points, or `node_corners` corners with
+/// the point's); then to a re-hash's, and after as many re-hashes as nodes, to the next node
+/// with room. `None` when no node has room for some point.
+fn deal(mesh: &Mesh, nodes: usize, node_points: usize, node_corners: usize) -> Option<Dealt> {
+    let mut points = vec![0usize; nodes];
+    let mut dealt = Dealt {
+        node: Vec::with_capacity(mesh.vertices.len()),
+        corners: vec![0; nodes],
+    };
+    for (v, c) in mesh.vertices.iter().zip(corners_at_points(mesh)) {
+        let pn = [
+            v.pos.x, v.pos.y, v.pos.z, v.normal.x, v.normal.y, v.normal.z,
+        ];
+        let full = |k: usize| points[k] >= node_points || dealt.corners[k] + c > node_corners;
+        let mut at = owner(pn, nodes, 0);
+        let mut attempt = 0;
+        while full(at) {
+            attempt += 1;
+            if attempt < nodes {
+                at = owner(pn, nodes, attempt);
+            } else if attempt < 2 * nodes {
+                at = (at + 1) % nodes;
+            } else {
+                return None;
+            }
+        }
+        points[at] += 1;
+        dealt.corners[at] += c;
+        dealt.node.push(at);
+    }
+    Some(dealt)
+}
+
+/// The node of `nodes` that the controller's `owner` (carm-common.inc) names for a sample point
+/// of position and normal `pn` at this attempt (0: the first choice): an FNV-style hash of
+/// the six floats' bits, as occam's INT64 arithmetic computes it.
+fn owner(pn: [f32; 6], nodes: usize, attempt: usize) -> usize {
+    let mut h = 1_469_598_103_934_665_603u64 ^ attempt as u64;
+    for x in pn {
+        // INT64 of an INT32 extends its sign
+        h = (h ^ i64::from(x.to_bits() as i32) as u64).wrapping_mul(1_099_511_628_211);
+    }
+    h ^= h >> 29;
+    h = h.wrapping_mul(2_654_435_761);
+    h ^= h >> 32;
+    ((h >> 1) % nodes as u64) as usize
 }
 
 /// The most sample points the run may have: the mesh's, or with adaptive subdivision
