@@ -408,6 +408,14 @@ fn carm_refuses_what_it_cannot_do_clearly() {
             ][..],
             "--load-tolerance 0.5",
         ),
+        (
+            &["--solver", "carm", "--no-adapt", "--tasks", "0"][..],
+            "--tasks 0 --worker-threads 0: a node runs 1 to 16 tasks",
+        ),
+        (
+            &["--solver", "carm", "--no-adapt", "--worker-threads", "16"][..],
+            "at most 16 tasks and threads together",
+        ),
     ] {
         let output = Command::new(env!("CARGO_BIN_EXE_occ"))
             .arg("radiosity")
@@ -605,6 +613,31 @@ fn carm_spreads_the_cornell_box_with_an_eighth_of_it_a_node() {
         "{}",
         spread["scene"]["octree"]
     );
+}
+
+/// A node's tasks and threads take its receivers in turn, and its database manager walks their
+/// rays, parking a batch that waits for voxels while the others go on: with the Cornell box
+/// spread (an eighth of it a node), two tasks and two threads a node give the very solution one
+/// task gives, and every node's walks still fetch.
+#[test]
+fn carm_tasks_and_threads_give_the_same_solution() {
+    let settings = [SETTINGS, &["--voxel-triangles", "8"][..]].concat();
+    let carm = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
+    let replicated = solve(&scratch("carm-walkers-replicated"), &settings, &carm);
+    let all = all_voxel_bytes(&replicated);
+    let (node, cache) = ((all / 8).to_string(), (all / 16).to_string());
+    let spread = [&carm[..], &["--node-memory", &node, "--cache", &cache]].concat();
+    let one = solve(&scratch("carm-walkers-one"), &settings, &spread);
+    let many = [&spread[..], &["--tasks", "2", "--worker-threads", "2"]].concat();
+    let four = solve(&scratch("carm-walkers-four"), &settings, &many);
+    assert_eq!(means(&one), means(&four));
+    assert_eq!(one["totals"], four["totals"]);
+    // the receivers went out in smaller batches, one at a time to each walker
+    let nodes = |r: &serde_json::Value| r["nodes"].as_array().expect("nodes").clone();
+    for (a, b) in nodes(&one).iter().zip(&nodes(&four)) {
+        assert!(b["walks"].as_u64() > a["walks"].as_u64(), "{a}\n{b}");
+        assert!(b["cache_misses"].as_u64() > Some(0), "{b}");
+    }
 }
 
 #[test]
