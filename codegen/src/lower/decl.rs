@@ -192,13 +192,29 @@ impl Tr<'_, '_> {
                 Type::Chan(..) | Type::Timer | Type::Port(_) | Type::Error
             );
             match size_of(&self.cx.checked.types, &ty) {
-                Some(bytes) if data && bytes >= VECTOR_BYTES && self.in_expr == 0 => {
+                Some(bytes)
+                    if data
+                        && bytes >= VECTOR_BYTES
+                        && self.in_expr == 0
+                        && !self.asm_takes_addresses() =>
+                {
                     self.vector(sym, &ty, bytes, n.span)?;
                 }
                 _ => self.var(n)?,
             }
         }
         Ok(())
+    }
+
+    /// Whether an `ASM` block of the program takes an address (`LD ADDRESSOF x`, `LDLP x`): an
+    /// address is a 32-bit offset from the node's first workspace chunk, which a vector taken
+    /// later may lie too far from, so such a program keeps its large arrays in its frames.
+    fn asm_takes_addresses(&self) -> bool {
+        self.cx.checked.asm.values().any(|code| {
+            code.ops
+                .iter()
+                .any(|op| matches!(op, occ_compiler::checked::AsmOp::Address(_)))
+        })
     }
 
     /// Binds `sym`, an array of `bytes`, to memory taken from the node as this runs.
