@@ -116,13 +116,12 @@ fn a_busy_node_gives_way_on_one_thread() {
     assert_eq!(text(&o.stdout), "3000000\n");
 }
 
-/// A node whose program needs more memory than `--node-memory` gives it is a runtime error
-/// naming the node.
-#[test]
-fn a_node_over_its_memory_budget_is_named() {
-    let dir = std::env::temp_dir().join(format!("occ-mem-{}", std::process::id()));
+/// Writes the program of the memory tests: PROCESSOR 7 declares and fills a 400,000-byte
+/// table, PROCESSOR 0 does nothing; returns its path.
+fn table_on_processor_7(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("occ-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let file = dir.join("big.occ");
+    let file = dir.join("table.occ");
     std::fs::write(
         &file,
         "PROC main (CHAN BYTE keyboard?, screen!, error!)\n  PLACED PAR\n    PROCESSOR 0\n      \
@@ -130,6 +129,14 @@ fn a_node_over_its_memory_budget_is_named() {
          table[i] := i\n:\n",
     )
     .expect("write test program");
+    file
+}
+
+/// A node whose program needs more memory than `--node-memory` gives it is a runtime error
+/// naming the node.
+#[test]
+fn a_node_over_its_memory_budget_is_named() {
+    let file = table_on_processor_7("mem");
     let ok = occ_run(&file, &[]);
     assert!(
         ok.status.success(),
@@ -150,17 +157,7 @@ fn a_node_over_its_memory_budget_is_named() {
 /// declares it takes none of it, though every node runs the same program with the same frame.
 #[test]
 fn a_node_takes_only_the_large_arrays_it_declares() {
-    let dir = std::env::temp_dir().join(format!("occ-vec-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let file = dir.join("vec.occ");
-    std::fs::write(
-        &file,
-        "PROC main (CHAN BYTE keyboard?, screen!, error!)\n  PLACED PAR\n    PROCESSOR 0\n      \
-         SKIP\n    PROCESSOR 7\n      [100000]INT table:\n      SEQ i = 0 FOR 100000\n        \
-         table[i] := i\n:\n",
-    )
-    .expect("write test program");
-    let o = occ_run(&file, &["--stats"]);
+    let o = occ_run(&table_on_processor_7("vec"), &["--stats"]);
     let out = text(&o.stdout) + &text(&o.stderr);
     assert!(o.status.success(), "{out}");
     let peak = |node: &str| -> u64 {
