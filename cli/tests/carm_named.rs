@@ -54,7 +54,8 @@ fn named_agrees(name: &str, settings: &[&str], flags: &[&str]) -> serde_json::Va
         "carm-named.occ against the reference",
     );
     assert!(balance_error(&named_run) < 1e-9, "{}", named_run["totals"]);
-    for node in named_run["nodes"].as_array().expect("nodes") {
+    // every node assembles voxels for its walks but the root, which keeps no sample points
+    for node in named_run["nodes"].as_array().expect("nodes").iter().skip(1) {
         assert!(
             named(node, "voxel_misses") > 0,
             "no voxel assembled: {node}"

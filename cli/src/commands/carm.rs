@@ -360,7 +360,8 @@ pub fn solve(
 
 /// The values of carm.occ's capacities (`VAL INT NAME IS n:` in its capacities block) for
 /// `solver`'s scene on `settings.nodes` nodes: the scene's counts, and per node its share of the
-/// sample points and of their element corners times the load tolerance (with room for one
+/// sample points (shared by the nodes but the root, when there are others) and of their
+/// element corners times the load tolerance (with room for one
 /// more point's corners), beyond which the controller re-hashes a point to another node, and
 /// the most patches a node has corners of (`node_patches`).
 fn capacities(
@@ -385,7 +386,9 @@ fn capacities(
     let mesh = &solver.mesh;
     let corners_at = corners_at_points(mesh);
     let most_at_one = corners_at.iter().copied().max().unwrap_or(0);
-    let share = |n: usize| (tolerance * n as f64 / settings.nodes as f64).ceil() as usize;
+    // the nodes that keep sample points: all but the root, when there are others
+    let keepers = settings.nodes.saturating_sub(1).max(1);
+    let share = |n: usize| (tolerance * n as f64 / keepers as f64).ceil() as usize;
     let floats = |bytes: u64| bytes.div_ceil(4) as usize;
     // Adaptive subdivision adds up to `growth` points, each splitting an edge of one or two
     // elements (two new elements), and each split element brings five corners (programs/
@@ -566,7 +569,8 @@ fn deal(mesh: &Mesh, nodes: usize, node_points: usize, node_corners: usize) -> O
 
 /// The node of `nodes` that the controller's `owner` (carm-common.inc) names for a sample point
 /// of position and normal `pn` at this attempt (0: the first choice): an FNV-style hash of
-/// the six floats' bits, as occam's INT64 arithmetic computes it.
+/// the six floats' bits, as occam's INT64 arithmetic computes it, over the nodes but the root
+/// when there are others.
 fn owner(pn: [f32; 6], nodes: usize, attempt: usize) -> usize {
     let mut h = 1_469_598_103_934_665_603u64 ^ attempt as u64;
     for x in pn {
@@ -576,7 +580,11 @@ fn owner(pn: [f32; 6], nodes: usize, attempt: usize) -> usize {
     h ^= h >> 29;
     h = h.wrapping_mul(2_654_435_761);
     h ^= h >> 32;
-    ((h >> 1) % nodes as u64) as usize
+    if nodes > 1 {
+        1 + ((h >> 1) % (nodes as u64 - 1)) as usize
+    } else {
+        0
+    }
 }
 
 /// The most sample points the run may have: the mesh's, or with adaptive subdivision
