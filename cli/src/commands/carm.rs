@@ -361,9 +361,9 @@ pub fn solve(
 /// The values of carm.occ's capacities (`VAL INT NAME IS n:` in its capacities block) for
 /// `solver`'s scene on `settings.nodes` nodes: the scene's counts, and per node its share of the
 /// sample points (shared by the nodes but the root, when there are others) and of their
-/// element corners times the load tolerance (with room for one
-/// more point's corners), beyond which the controller re-hashes a point to another node, and
-/// the most patches a node has corners of (`node_patches`).
+/// element corners times the load tolerance (with room for one more point's corners), beyond
+/// which the controller re-hashes a point to another node, the most patches a node has corners
+/// of (`node_patches`), and the worker tasks and threads a node runs.
 fn capacities(
     solver: &Solver,
     flat: &FlatOctree,
@@ -444,7 +444,6 @@ fn capacities(
         ),
         ("MAX.OBJECTS", solver.scene.objects.len()),
         ("TASKS", settings.tasks),
-        ("THREADS", settings.worker_threads),
         // the nodes the controller deals points and corners to, a message's worth each
         ("DEAL.NODES", settings.nodes),
         // a part of a shot's report (3 a patch) with room for the candidates' elements, a
@@ -476,7 +475,8 @@ fn capacities(
     // every array holds at least one element; a node may run no worker threads
     Ok(capacities
         .into_iter()
-        .map(|(name, n)| (name, if name == "THREADS" { n } else { n.max(1) }))
+        .map(|(name, n)| (name, n.max(1)))
+        .chain([("THREADS", settings.worker_threads)])
         .collect())
 }
 

@@ -60,10 +60,10 @@ impl<'p> Compiler<'p> {
             Ok(())
         });
         self.proc_name = outer;
-        let (id, words) = r?;
+        let (id, size) = r?;
         let entry = ProcEntry {
             id,
-            size: words,
+            size,
             depth,
             params: slots,
             param_types: types,

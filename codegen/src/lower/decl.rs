@@ -243,10 +243,7 @@ impl Tr<'_, '_> {
 
     /// Gives back the vectors of the scopes opened since `open` vectors were held.
     pub fn free_vectors(&mut self, open: usize) {
-        while self.vectors.len() > open {
-            let Some((off, bytes)) = self.vectors.pop() else {
-                break;
-            };
+        for (off, bytes) in self.vectors.split_off(open).into_iter().rev() {
             let a = self.local_addr(off);
             let v = self.b.ins().load(types::I64, mem(), a, 0);
             let size = self.iconst(bytes);
