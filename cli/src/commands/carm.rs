@@ -79,10 +79,10 @@ const PART_PATCHES: usize = 4096;
 const CANDIDATES: usize = 4;
 
 /// The INTs of a node's counters (carm.occ's `COUNTERS`).
-const COUNTERS: usize = 12;
+const COUNTERS: usize = 15;
 
 /// Most INTs of a program's own counters after those (`MAX.COUNTERS` less `COUNTERS`).
-const MAX_MORE_COUNTERS: usize = 12;
+const MAX_MORE_COUNTERS: usize = 9;
 
 /// Loop back-edges per timeslice when `--threads 1` makes runs repeat exactly (as `occ run`).
 const COUNTED_SLICE: u32 = 1024;
@@ -119,6 +119,9 @@ pub struct CarmSettings {
     pub tasks: usize,
     /// Worker threads a node runs at low priority (`--worker-threads`).
     pub worker_threads: usize,
+    /// Task poaching: a node that runs out of receivers in a shot asks its neighbours for some
+    /// of theirs (`--no-poach`: false).
+    pub poach: bool,
     /// The voxels spread over the nodes (`--node-memory`, `--cache`); `None`: every voxel on
     /// every node.
     pub memory: Option<Memory>,
@@ -139,6 +142,9 @@ pub struct Memory {
 /// The most worker tasks and threads a node runs together: each holds its batch's scratch
 /// (about 0.8 MB), and its parked batch is kept by the database manager (as much again).
 const MOST_WALKERS: usize = 16;
+
+/// The most receivers one node lends another at once when poaching (carm.occ's `LOAN`).
+const LOAN: usize = 256;
 
 /// The default [`CarmSettings::load_tolerance`].
 pub const LOAD_TOLERANCE: f64 = 1.25;
@@ -183,6 +189,13 @@ pub struct NodeCounters {
     pub store_reads: u64,
     /// Fetches it answered from its share.
     pub fetches_served: u64,
+    /// Task poaching (programs/README.md, "Task poaching"): the times it ran out of receivers
+    /// in a shot and asked a neighbour for some.
+    pub poaches: u64,
+    /// Receivers its neighbours lent it, whose form factors it computed (poached tasks).
+    pub poached: u64,
+    /// Its own receivers it lent its neighbours.
+    pub lent: u64,
     /// Channel communications (soft and link) it made.
     pub communications: u64,
     /// Fraction of the wall time it spent running processes.
@@ -472,11 +485,15 @@ fn capacities(
             ("MAX.TRI.CACHE", triangles),
         ]);
     }
-    // every array holds at least one element; a node may run no worker threads
+    // every array holds at least one element; a node may run no worker threads, and lend
+    // none of its receivers (no poaching)
     Ok(capacities
         .into_iter()
         .map(|(name, n)| (name, n.max(1)))
-        .chain([("THREADS", settings.worker_threads)])
+        .chain([
+            ("THREADS", settings.worker_threads),
+            ("LOAN", if settings.poach { LOAN } else { 0 }),
+        ])
         .collect())
 }
 
@@ -1103,7 +1120,7 @@ enum Message {
     Result(usize, Vec3),
     /// A node's counters: node, points, corners, form factors, rays, voxels held at the end,
     /// their bytes, the most bytes of voxels held, walks, walks that fetched, voxels fetched,
-    /// fetches served.
+    /// fetches served, poaches sent, receivers poached, receivers lent.
     Counters([u64; COUNTERS]),
     /// The program's own counters of the node whose [`Message::Counters`] came last.
     MoreCounters(Vec<u64>),
@@ -1417,6 +1434,9 @@ fn report(
                 .and_then(|m| m.2.get(c[0] as usize).copied())
                 .unwrap_or(0),
             fetches_served: c[11],
+            poaches: c[12],
+            poached: c[13],
+            lent: c[14],
             communications: n.stats.communications,
             busy: if wall > 0.0 {
                 n.busy.as_secs_f64() / wall

@@ -105,6 +105,10 @@ pub struct Args {
     /// the processor while every task waits for voxels.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub worker_threads: usize,
+    /// `--solver carm`: no task poaching (a node that runs out of receivers in a shot does not
+    /// ask its neighbours for some of theirs).
+    #[arg(long)]
+    pub no_poach: bool,
     /// Where carm.occ's nodes run: inproc (this process) or mpi (spread over the ranks of
     /// `mpirun`, rank 0 playing the host and writing the outputs; needs a build with
     /// --features mpi).
@@ -366,6 +370,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                 load_tolerance: args.load_tolerance,
                 tasks: args.tasks,
                 worker_threads: args.worker_threads,
+                poach: !args.no_poach,
                 memory: args
                     .node_memory
                     .zip(args.cache)
