@@ -5,7 +5,7 @@ use std::process::Command;
 
 /// `occ check` on `source` (written to a temporary file): exit success and stderr.
 fn occ_check(name: &str, source: &str) -> (bool, String) {
-    let dir = std::env::temp_dir().join(format!("occ-check-{}-{name}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("check-{name}"));
     fs::create_dir_all(&dir).expect("temporary folder");
     let file = dir.join("prog.occ");
     fs::write(&file, source).expect("program file");
@@ -57,6 +57,7 @@ fn a_missing_include_is_a_labelled_diagnostic() {
 /// each `-I` folder, and the standard library.
 #[test]
 fn a_missing_include_names_every_folder_searched() {
+    // (a short path: miette wraps long ones; removed below)
     let dir = std::env::temp_dir().join(format!("occ-search-{}", std::process::id()));
     let extra = dir.join("extra");
     fs::create_dir_all(&extra).expect("temporary folders");
@@ -89,7 +90,7 @@ fn a_missing_include_names_every_folder_searched() {
 /// binary would otherwise read (`OCC_STDLIB`) empty.
 #[test]
 fn the_stdlib_is_found_with_no_stdlib_folder() {
-    let dir = std::env::temp_dir().join(format!("occ-embedded-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("embedded");
     let empty = dir.join("empty");
     fs::create_dir_all(&empty).expect("temporary folders");
     fs::write(
@@ -113,7 +114,7 @@ fn the_stdlib_is_found_with_no_stdlib_folder() {
 /// An `ASM` instruction occ does not run is refused at its own line, naming it.
 #[test]
 fn an_asm_instruction_beyond_those_that_run_is_refused_at_its_line() {
-    let dir = std::env::temp_dir().join(format!("occ-check-{}-asm", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("check-asm");
     fs::create_dir_all(&dir).expect("temporary folder");
     let file = dir.join("prog.occ");
     let source = "PROC p ()\n  INT x:\n  ASM\n    LD ADDRESSOF x\n    FPLDNLSN\n    ST x\n:\n";

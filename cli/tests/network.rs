@@ -99,7 +99,7 @@ fn one_thread_repeats_exactly() {
 /// running: the pool hands the thread on after a few timeslices.
 #[test]
 fn a_busy_node_gives_way_on_one_thread() {
-    let dir = std::env::temp_dir().join(format!("occ-net-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("net");
     std::fs::create_dir_all(&dir).expect("temp dir");
     let file = dir.join("busy.occ");
     std::fs::write(
@@ -119,7 +119,7 @@ fn a_busy_node_gives_way_on_one_thread() {
 /// Writes the program of the memory tests: PROCESSOR 7 declares and fills a 400,000-byte
 /// table, PROCESSOR 0 does nothing; returns its path.
 fn table_on_processor_7(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("occ-{name}-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("net-{name}"));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let file = dir.join("table.occ");
     std::fs::write(
@@ -211,7 +211,7 @@ fn bad_settings_are_refused() {
 /// PROCs left out, and the output is the one of `--all-routines`, which compiles them all.
 #[test]
 fn stats_count_the_routines_nothing_calls() {
-    let dir = std::env::temp_dir().join(format!("occ-net-lean-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("net-lean");
     std::fs::create_dir_all(&dir).expect("temp dir");
     let file = dir.join("lean.occ");
     std::fs::write(
