@@ -442,22 +442,7 @@ fn carm_refuses_what_it_cannot_do_clearly() {
 /// on 4 and 13 nodes, the voxels replicated or spread, with adaptive subdivision or without.
 #[test]
 fn carm_reports_in_parts_give_the_same_solution() {
-    let programs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../programs");
-    let copy = scratch("carm-parts-program");
-    std::fs::create_dir_all(&copy).expect("a scratch folder");
-    let limit = "VAL INT PART.PATCHES IS 4096:";
-    let mut edited = 0;
-    for entry in std::fs::read_dir(&programs).expect("programs/") {
-        let path = entry.expect("an entry").path();
-        let Some(name) = path.file_name() else {
-            continue;
-        };
-        let text = std::fs::read_to_string(&path).expect("a program file");
-        edited += text.matches(limit).count();
-        let text = text.replace(limit, "VAL INT PART.PATCHES IS 3:");
-        std::fs::write(copy.join(name), text).expect("the copy");
-    }
-    assert_eq!(edited, 1, "{limit} is declared once in programs/");
+    let copy = programs_with("carm-parts-program", "VAL INT PART.PATCHES IS", "4096", "3");
     let program = copy.join("carm.occ");
     let program = program.to_str().expect("a UTF-8 path");
     let lamp = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
@@ -489,6 +474,27 @@ fn carm_reports_in_parts_give_the_same_solution() {
         assert_eq!(means(&parts), means(&whole), "{name}");
         assert_eq!(parts["totals"], whole["totals"], "{name}");
     }
+}
+
+/// A copy of programs/ (into the scratch folder `name`) in which the constant declared once
+/// as `declared value:` has the value `to`; returns the copy's folder.
+fn programs_with(name: &str, declared: &str, value: &str, to: &str) -> std::path::PathBuf {
+    let programs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../programs");
+    let copy = scratch(name);
+    std::fs::create_dir_all(&copy).expect("a scratch folder");
+    let (from, to) = (format!("{declared} {value}:"), format!("{declared} {to}:"));
+    let mut edited = 0;
+    for entry in std::fs::read_dir(&programs).expect("programs/") {
+        let path = entry.expect("an entry").path();
+        let Some(file) = path.file_name() else {
+            continue;
+        };
+        let text = std::fs::read_to_string(&path).expect("a program file");
+        edited += text.matches(&from).count();
+        std::fs::write(copy.join(file), text.replace(&from, &to)).expect("the copy");
+    }
+    assert_eq!(edited, 1, "{from} is declared once in programs/");
+    copy
 }
 
 /// In a closed scene with sheets (the two rooms: their lamp panels hang below the ceilings)
@@ -628,27 +634,31 @@ fn carm_spreads_the_cornell_box_with_an_eighth_of_it_a_node() {
 }
 
 /// Task poaching: a node that runs out of receivers in a shot asks its neighbours for some, and
-/// computes the form factors to those they lend it (programs/README.md, "Task poaching"). With
-/// the table lamp spread over 4 nodes (`--threads 1`: the same loans every run), both geometry
-/// protocols give the solution they give with `--no-poach`, to the bit, with receivers lent:
-/// the root, which keeps none of its own, computes some of its children's; every receiver lent
-/// is computed once, and the form factors are those of the run without poaching.
+/// computes the form factors to those they lend it (programs/README.md, "Task poaching"). A
+/// node lends only when it has two batches' worth left, so the programs are run with batches of
+/// 32 receivers (`MAX.BATCH`; the table lamp's nodes have about a thousand each). With the lamp
+/// spread over 4 nodes (`--threads 1`: the same loans every run), both geometry protocols, with
+/// one task a node or two tasks and a thread, give the solution they give with `--no-poach`, to
+/// the bit, with receivers lent: the root, which keeps none of its own, computes some of its
+/// children's; every receiver lent is computed once, and the form factors are those of the run
+/// without poaching.
 #[test]
 fn carm_poaching_moves_receivers_and_not_the_solution() {
-    let named = concat!(env!("CARGO_MANIFEST_DIR"), "/../programs/carm-named.occ");
-    let carm = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
-    for (name, program, spread) in [
-        ("carm", None, ["--node-memory", "2112", "--cache", "1056"]),
-        (
-            "named",
-            Some(named),
-            ["--node-memory", "4224", "--cache", "2112"],
-        ),
+    let copy = programs_with("carm-poach-programs", "VAL INT MAX.BATCH IS", "1024", "32");
+    let (carm, named) = (copy.join("carm.occ"), copy.join("carm-named.occ"));
+    let nodes = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
+    let walkers = ["--tasks", "2", "--worker-threads", "1"];
+    let (carm_spread, named_spread) = (
+        ["--node-memory", "2112", "--cache", "1056"],
+        ["--node-memory", "4224", "--cache", "2112"],
+    );
+    for (name, program, spread, walkers) in [
+        ("carm", &carm, carm_spread, &[][..]),
+        ("named", &named, named_spread, &[][..]),
+        ("named-walkers", &named, named_spread, &walkers[..]),
     ] {
-        let mut flags = [&carm[..], &spread[..]].concat();
-        if let Some(program) = program {
-            flags.extend(["--program", program]);
-        }
+        let program = program.to_str().expect("a UTF-8 path");
+        let mut flags = [&nodes[..], &spread, walkers, &["--program", program]].concat();
         let poaching = solve(&scratch(&format!("carm-poach-{name}")), &LAMP, &flags);
         flags.push("--no-poach");
         let alone = solve(&scratch(&format!("carm-poach-{name}-not")), &LAMP, &flags);
