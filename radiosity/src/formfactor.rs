@@ -118,18 +118,85 @@ pub fn source_samples_weighted<C: AsRef<[f32]>>(
     out: &mut Vec<Vec3>,
     weights: &mut Vec<f32>,
 ) {
-    out.clear();
     weights.clear();
+    stratified_samples(src, m, rng, out, |u, v| {
+        if let Some(d) = density {
+            weights.push(d.at(u, v));
+        }
+    });
+}
+
+/// [`source_samples_weighted`] for several densities of one source at once ([`DensitySet`]):
+/// the same samples, and in `weights[k][j]` the weight density `j` gives sample `k`, exactly
+/// as [`source_samples_weighted`] with that density gives it (1 for a uniform one).
+pub fn source_samples_sets<const N: usize>(
+    src: &Tri,
+    m: u32,
+    densities: &DensitySet<N>,
+    rng: &mut Pcg32,
+    out: &mut Vec<Vec3>,
+    weights: &mut Vec<[f32; N]>,
+) {
+    weights.clear();
+    stratified_samples(src, m, rng, out, |u, v| weights.push(densities.at(u, v)));
+}
+
+/// The jittered `k × k` grid of [`source_samples`] into `out`, calling `at(u, v)` with each
+/// sample's place in the square [`Tri::sample`] warps.
+fn stratified_samples(
+    src: &Tri,
+    m: u32,
+    rng: &mut Pcg32,
+    out: &mut Vec<Vec3>,
+    mut at: impl FnMut(f32, f32),
+) {
+    out.clear();
     let k = sample_grid(m);
     for i in 0..k {
         for j in 0..k {
             let u = (i as f32 + rng.next_f32()) / k as f32;
             let v = (j as f32 + rng.next_f32()) / k as f32;
             out.push(src.sample(u, v));
-            if let Some(d) = density {
-                weights.push(d.at(u, v));
-            }
+            at(u, v);
         }
+    }
+}
+
+/// Several densities of one source side by side (a shot's channels summed and each channel,
+/// [`channels_differ`]): each cell holds the `N` densities' values, 1 for a uniform one, so
+/// that a sample looks its weights up once.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DensitySet<const N: usize> {
+    g: u32,
+    cells: Vec<[f32; N]>,
+    uniform: [bool; N],
+}
+
+impl<const N: usize> DensitySet<N> {
+    /// The set of `densities` (`None`: uniform); those given must share their grid, as
+    /// [`SourceDensity::of_parts_sets`] makes them.
+    pub fn new(densities: [Option<&SourceDensity>; N]) -> DensitySet<N> {
+        let g = densities.iter().flatten().map(|d| d.g).next().unwrap_or(1);
+        debug_assert!(densities.iter().flatten().all(|d| d.g == g));
+        let cells = (0..(g * g) as usize)
+            .map(|i| densities.map(|d| d.map_or(1.0, |d| d.cells[i])))
+            .collect();
+        DensitySet {
+            g,
+            cells,
+            uniform: densities.map(|d| d.is_none()),
+        }
+    }
+
+    /// The densities at `(u, v)` in [0,1)², each as [`SourceDensity::at`] gives it.
+    pub fn at(&self, u: f32, v: f32) -> [f32; N] {
+        let cell = |x: f32| ((x * self.g as f32) as u32).min(self.g - 1);
+        self.cells[(cell(u) * self.g + cell(v)) as usize]
+    }
+
+    /// Which densities are uniform.
+    pub fn uniform(&self) -> [bool; N] {
+        self.uniform
     }
 }
 
@@ -140,6 +207,8 @@ pub fn source_samples_weighted<C: AsRef<[f32]>>(
 /// This lets a patch shoot what each of its elements holds rather than its average: a floor
 /// patch half in a block's shadow shoots from its lit half only, which the block's face, close
 /// by, sees very differently (issue 10, cause 4). Far receivers average the same samples.
+/// Where the channels are spread differently over the patch (a floor strip lit mostly by a red
+/// wall), each channel shoots with its own ([`channels_differ`]).
 ///
 /// The cells are owned (`Vec<f32>`, as the solver tabulates them) or borrowed (`&[f32]`, as an
 /// intrinsic is passed them, [`SourceDensity::from_cells`]).
@@ -195,8 +264,22 @@ impl SourceDensity {
     /// those are tested (about the grid's cells in all, where a search of every part per cell
     /// costs their product).
     pub fn of_parts(src: &Tri, g: u32, parts: &[(Tri, f32)]) -> Option<SourceDensity> {
+        let parts: Vec<(Tri, [f32; 1])> = parts.iter().map(|&(t, d)| (t, [d])).collect();
+        let [density] = SourceDensity::of_parts_sets(src, g, &parts);
+        density
+    }
+
+    /// [`SourceDensity::of_parts`] of several densities over the same parts at once (each part
+    /// with one value per density: the solver tabulates a shot's channels sum and each channel,
+    /// [`channels_differ`]); `[j]` is exactly what [`SourceDensity::of_parts`] makes of the
+    /// parts with their `j`-th values.
+    pub fn of_parts_sets<const N: usize>(
+        src: &Tri,
+        g: u32,
+        parts: &[(Tri, [f32; N])],
+    ) -> [Option<SourceDensity>; N] {
         if parts.len() < 2 {
-            return None;
+            return std::array::from_fn(|_| None);
         }
         let g = g.max(1);
         let gf = g as f32;
@@ -230,7 +313,7 @@ impl SourceDensity {
                 }
             }
         }
-        let mut cells = Vec::with_capacity(owner.len());
+        let mut cells: [Vec<f32>; N] = std::array::from_fn(|_| Vec::with_capacity(owner.len()));
         for i in 0..g {
             for j in 0..g {
                 let k = owner[(i * g + j) as usize].unwrap_or_else(|| {
@@ -242,10 +325,12 @@ impl SourceDensity {
                         .fold((0, f32::MAX), |b, c| if c.1 < b.1 { c } else { b })
                         .0
                 });
-                cells.push(parts[k].1);
+                for (set, &value) in cells.iter_mut().zip(&parts[k].1) {
+                    set.push(value);
+                }
             }
         }
-        SourceDensity::from_values(g, cells)
+        cells.map(|c| SourceDensity::from_values(g, c))
     }
 }
 
@@ -324,7 +409,7 @@ pub fn receiver_rays(p: Vec3, n: Vec3, src: &Tri, config: &FormFactorConfig) -> 
 /// the receivers of a batch draw from one generator in order and a node holding one of them
 /// draws the same set by skipping to its slot (`RAD.RECEIVER.SAMPLES`). Returns the rays.
 pub fn receiver_samples<C: AsRef<[f32]>>(
-    (p, n): (Vec3, Vec3),
+    receiver: (Vec3, Vec3),
     src: &Tri,
     config: &FormFactorConfig,
     density: Option<&SourceDensity<C>>,
@@ -332,15 +417,47 @@ pub fn receiver_samples<C: AsRef<[f32]>>(
     out: &mut Vec<Vec3>,
     weights: &mut Vec<f32>,
 ) -> u32 {
+    weights.clear();
+    receiver_slot(receiver, src, config, rng, out, |rays, rng, out| {
+        source_samples_weighted(src, rays, density, rng, out, weights)
+    })
+}
+
+/// [`receiver_samples`] with the weights of several densities of the source
+/// ([`source_samples_sets`]).
+pub fn receiver_samples_sets<const N: usize>(
+    receiver: (Vec3, Vec3),
+    src: &Tri,
+    config: &FormFactorConfig,
+    densities: &DensitySet<N>,
+    rng: &mut Pcg32,
+    out: &mut Vec<Vec3>,
+    weights: &mut Vec<[f32; N]>,
+) -> u32 {
+    weights.clear();
+    receiver_slot(receiver, src, config, rng, out, |rays, rng, out| {
+        source_samples_sets(src, rays, densities, rng, out, weights)
+    })
+}
+
+/// The receiver's slot of `rng` ([`receiver_samples`]): `draw(rays, rng, out)` takes its
+/// samples from the slot's start, and `rng` is left at the next slot.
+fn receiver_slot(
+    (p, n): (Vec3, Vec3),
+    src: &Tri,
+    config: &FormFactorConfig,
+    rng: &mut Pcg32,
+    out: &mut Vec<Vec3>,
+    draw: impl FnOnce(u32, &mut Pcg32, &mut Vec<Vec3>),
+) -> u32 {
     let slot = 2 * u64::from(sample_grid(config.rays)).pow(2);
     let rays = receiver_rays(p, n, src, config);
     if rays == 0 {
         out.clear();
-        weights.clear();
         rng.advance(slot);
         return 0;
     }
-    source_samples_weighted(src, rays, density, rng, out, weights);
+    draw(rays, rng, out);
     rng.advance(slot - 2 * out.len() as u64);
     rays
 }
@@ -391,10 +508,57 @@ pub fn form_factor_weighted(
     samples: &[Vec3],
     weights: &[f32],
     config: &FormFactorConfig,
-    mut occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
+    occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
 ) -> FormFactor {
+    form_factor_sets(p, n, src, samples, weights, config, occluded).0
+}
+
+/// The weights of the samples of one or more densities ([`form_factor_sets`]).
+pub trait SampleWeights<const N: usize> {
+    /// Whether density `j` is uniform (its weights are all 1 and the analytic form takes the
+    /// share of visible samples, not their kernels' share).
+    fn uniform(&self, j: usize) -> bool;
+    /// Sample `k`'s weight in each density.
+    fn at(&self, k: usize) -> [f32; N];
+}
+
+/// One density's weights, empty for a uniform source ([`form_factor_weighted`]).
+impl SampleWeights<1> for &[f32] {
+    fn uniform(&self, _: usize) -> bool {
+        self.is_empty()
+    }
+    fn at(&self, k: usize) -> [f32; 1] {
+        [self.get(k).copied().unwrap_or(1.0)]
+    }
+}
+
+/// Several densities' weights, as [`source_samples_sets`] draws them, and which are uniform
+/// ([`DensitySet::uniform`]).
+impl<const N: usize> SampleWeights<N> for (&[[f32; N]], [bool; N]) {
+    fn uniform(&self, j: usize) -> bool {
+        self.1[j]
+    }
+    fn at(&self, k: usize) -> [f32; N] {
+        self.0.get(k).copied().unwrap_or([1.0; N])
+    }
+}
+
+/// [`form_factor_weighted`] for several densities' weights of the same samples at once, one
+/// shadow ray each (a shot's channels, whose unshot radiosity is spread differently over the
+/// source: [`channels_differ`]): `[j]` of the values returned is exactly what
+/// [`form_factor_weighted`] gives with density `j`'s weights and the same answers to the
+/// rays, and the [`FormFactor`]'s value is `[0]`'s.
+pub fn form_factor_sets<const N: usize>(
+    p: Vec3,
+    n: Vec3,
+    src: &Tri,
+    samples: &[Vec3],
+    weights: impl SampleWeights<N>,
+    config: &FormFactorConfig,
+    mut occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
+) -> (FormFactor, [f32; N]) {
     if !faces(p, n, src) {
-        return FormFactor::default();
+        return (FormFactor::default(), [0.0; N]);
     }
     let ns = src.normal();
     let area = src.area();
@@ -402,9 +566,9 @@ pub fn form_factor_weighted(
     let sub_area = area / samples.len() as f32;
     let analytic = sub_area > config.max_disc_bias * std::f32::consts::PI * d_min2;
     let origin = p + n * config.offset;
-    let (mut wallace, mut rays) = (0.0f32, 0u32);
+    let (mut wallace, mut rays) = ([0.0f32; N], 0u32);
     let (mut visible, mut above) = (0u32, 0u32);
-    let (mut kernel_visible, mut kernel_above) = (0.0f32, 0.0f32);
+    let (mut kernel_visible, mut kernel_above) = ([0.0f32; N], 0.0f32);
     for (k, &x) in samples.iter().enumerate() {
         let r = x - p;
         let len2 = r.length_squared();
@@ -424,25 +588,57 @@ pub fn form_factor_weighted(
             continue;
         }
         visible += 1;
-        let w = weights.get(k).copied().unwrap_or(1.0);
-        wallace += term * w;
-        kernel_visible += kernel * w;
+        let w = weights.at(k);
+        for j in 0..N {
+            wallace[j] += term * w[j];
+            kernel_visible[j] += kernel * w[j];
+        }
     }
-    let value = if !analytic {
+    let values = if !analytic {
         wallace
     } else if visible == 0 {
-        0.0
-    } else if weights.is_empty() {
-        point_polygon(p, n, &src.v) * visible as f32 / above as f32
+        [0.0; N]
     } else {
-        point_polygon(p, n, &src.v) * kernel_visible / kernel_above
+        let whole = point_polygon(p, n, &src.v);
+        std::array::from_fn(|j| {
+            if weights.uniform(j) {
+                whole * visible as f32 / above as f32
+            } else {
+                whole * kernel_visible[j] / kernel_above
+            }
+        })
     };
-    FormFactor {
+    let value = values.first().copied().unwrap_or(0.0);
+    let f = FormFactor {
         value,
         rays,
         analytic,
-    }
+    };
+    (f, values)
 }
+
+/// Whether a shot's channels must be shot each with its own density: whether any of the
+/// `channels` ([`SourceDensity::of_parts_sets`] of the source's elements' unshot radiosity per
+/// channel) departs from `sum` (that of the channels summed) by more than [`CHANNEL_SPREAD`]
+/// in some cell, or is uniform where it is not (or the reverse). Where the light a patch
+/// received is of one colour all over it, the channels' densities are the sum's and one form
+/// factor serves them all; where it is not (a floor strip lit mostly by a red wall, beside a
+/// floor lit by the white light), each channel shoots from where its own power is (issue 10:
+/// the channels' mixture of the dim block faces was off by up to 3%).
+pub fn channels_differ(sum: Option<&SourceDensity>, channels: &[Option<SourceDensity>]) -> bool {
+    channels.iter().any(|c| match (sum, c) {
+        (None, None) => false,
+        (Some(s), Some(c)) => {
+            (s.cells.iter().zip(&c.cells)).any(|(a, b)| (a - b).abs() > CHANNEL_SPREAD)
+        }
+        _ => true,
+    })
+}
+
+/// How far (in units of the mean density) a channel's density may depart from the channels'
+/// sum's before the channels shoot apart ([`channels_differ`]): a departure this small moves
+/// a channel's form factor by at most this fraction of the source's unweighted one.
+pub const CHANNEL_SPREAD: f32 = 1e-4;
 
 #[cfg(test)]
 mod tests {

@@ -9,7 +9,10 @@
 
 use glam::Vec3;
 
-use crate::formfactor::{FormFactorConfig, SourceDensity, form_factor_weighted, receiver_samples};
+use crate::formfactor::{
+    DensitySet, FormFactorConfig, SourceDensity, form_factor_sets, form_factor_weighted,
+    receiver_samples, receiver_samples_sets,
+};
 use crate::geom::Tri;
 use crate::mesh::Vertex;
 use crate::octree::{Octree, Traversal};
@@ -133,6 +136,57 @@ pub fn shoot_batch_visibility(
             },
         );
         *o = f.value;
+        stats.rays += if octree.is_some() { f.rays as u64 } else { 0 };
+        stats.analytic += f.analytic as u64;
+    }
+    stats
+}
+
+/// [`shoot_batch_visibility`] for several densities of the source at once (a shot's channels
+/// summed and each channel: [`crate::formfactor::channels_differ`]): the same samples and
+/// shadow rays, and in `out[i][j]` the form factor of point `i` weighted by density `j`,
+/// exactly as [`shoot_batch_visibility`] with that density gives it.
+pub fn shoot_batch_sets<const N: usize>(
+    octree: Option<&Octree>,
+    source: &Tri,
+    densities: &DensitySet<N>,
+    points: &[SamplePoint],
+    config: &FormFactorConfig,
+    seed: u64,
+    out: &mut [[f32; N]],
+) -> BatchStats {
+    let mut rng = Pcg32::new(seed, 0x5eed);
+    let mut samples = Vec::with_capacity(config.rays as usize + 8);
+    let mut weights = Vec::with_capacity(config.rays as usize + 8);
+    let mut stats = BatchStats::default();
+    for (p, o) in points.iter().zip(out.iter_mut()) {
+        stats.form_factors += 1;
+        let (eval, normal) = (Vec3::from(p.eval), Vec3::from(p.normal));
+        let rays = receiver_samples_sets(
+            (eval, normal),
+            source,
+            config,
+            densities,
+            &mut rng,
+            &mut samples,
+            &mut weights,
+        );
+        if rays == 0 {
+            *o = [0.0; N];
+            continue;
+        }
+        let (f, values) = form_factor_sets(
+            eval,
+            normal,
+            source,
+            &samples,
+            (weights.as_slice(), densities.uniform()),
+            config,
+            |_, origin, d, tmax| {
+                octree.is_some_and(|o| o.occluded(origin, d, 0.0, tmax, Traversal::Ropes))
+            },
+        );
+        *o = values;
         stats.rays += if octree.is_some() { f.rays as u64 } else { 0 };
         stats.analytic += f.analytic as u64;
     }

@@ -7,7 +7,8 @@
 //! - each element receives `A_e · ΔB_src · mean(F at its corners)`;
 //! - it absorbs `(1 - ρ)` of that and adds `ρ` of it to its own unshot power (a patch's is the
 //!   sum over its elements, and a patch shoots from where its elements hold it:
-//!   [`SourceDensity`]);
+//!   [`SourceDensity`]; each channel from where its own power is when the light a patch
+//!   received is not of one colour all over it: [`channels_differ`]);
 //! - what no element received is booked as *escaped* (through openings, plus form-factor error).
 //!
 //! Accounts are kept in `f64` so that `emitted = absorbed + escaped + unshot` holds to rounding.
@@ -20,9 +21,9 @@ use rayon::prelude::*;
 use crate::analysis::{self, SceneAnalysis, Stages};
 use crate::convergence::{Cadence, Errors};
 use crate::estimate::{self, Tally};
-use crate::formfactor::{FormFactorConfig, SourceDensity};
+use crate::formfactor::{DensitySet, FormFactorConfig, SourceDensity, channels_differ};
 use crate::geom::Tri;
-use crate::kernels::{SamplePoint, shoot_batch_visibility};
+use crate::kernels::{SamplePoint, shoot_batch_sets, shoot_batch_visibility};
 use crate::mesh::Mesh;
 use crate::octree::{Octree, OctreeConfig};
 use crate::overshoot::{self, Acceleration};
@@ -302,6 +303,20 @@ pub struct Solver<'a> {
     received_total: DVec3,
 }
 
+/// The densities a shot is made with ([`Solver::source_densities`]): the channels summed, and
+/// each channel's when they shoot apart.
+struct ShotDensities<'d> {
+    sum: Option<&'d SourceDensity>,
+    channels: Option<[Option<&'d SourceDensity>; 3]>,
+}
+
+/// A shot's form factors at the sample points: weighted by the channels' summed density (what
+/// refinement tests), and per channel when the channels shoot apart (what is then booked).
+struct Factors {
+    sum: Vec<f32>,
+    channels: Option<Vec<[f32; 3]>>,
+}
+
 impl<'a> Solver<'a> {
     /// Prepares a solve: builds the octree and books the emitted power as unshot.
     pub fn new(scene: &'a Scene, mesh: Mesh, config: SolverConfig) -> Solver<'a> {
@@ -421,7 +436,7 @@ impl<'a> Solver<'a> {
         };
         let borrowed = ambient.map_or_else(Vec::new, |a| self.borrow_overshoot(src, a));
         let shot = self.unshot[src] * self.config.overshoot;
-        let density = self.source_density(src);
+        let (density, channels) = self.source_densities(src);
         self.unshot[src] -= shot;
         let keep = 1.0 - self.config.overshoot;
         for (e, u) in self.mesh.elements.iter().zip(&mut self.element_unshot) {
@@ -434,10 +449,14 @@ impl<'a> Solver<'a> {
             far_rays: self.shot_rays(shot),
             ..self.config.form_factor
         };
-        let factors = self.shoot_all(src, density.as_ref(), &form_factor);
-        let mut factors = self.refine(src, factors, shot, density.as_ref(), &form_factor);
+        let densities = ShotDensities {
+            sum: density.as_ref(),
+            channels: channels.as_ref().map(|c| c.each_ref().map(Option::as_ref)),
+        };
+        let factors = self.shoot_all(src, &densities, &form_factor);
+        let mut factors = self.refine(src, factors, shot, &densities, &form_factor);
         if self.stages.close_rows {
-            self.close_row(src, density.as_ref(), &mut factors);
+            self.close_rows(src, &densities, &mut factors);
         }
         self.book(src, shot, delta_b, &factors);
         self.repay_overshoot(src, &borrowed);
@@ -455,6 +474,19 @@ impl<'a> Solver<'a> {
         let target = self.patch_area[src] * (1.0 - self.back_share_of(src, density));
         let scale = analysis::row_scale(target, received) as f32;
         factors.iter_mut().for_each(|f| *f *= scale);
+    }
+
+    /// [`Solver::close_row`] of the shot's factors, and of each channel's with its own
+    /// density when the channels shoot apart.
+    fn close_rows(&self, src: usize, densities: &ShotDensities, factors: &mut Factors) {
+        self.close_row(src, densities.sum, &mut factors.sum);
+        if let (Some(channels), Some(per)) = (densities.channels, factors.channels.as_mut()) {
+            for (c, density) in channels.into_iter().enumerate() {
+                let mut f: Vec<f32> = per.iter().map(|f| f[c]).collect();
+                self.close_row(src, density, &mut f);
+                per.iter_mut().zip(f).for_each(|(p, f)| p[c] = f);
+            }
+        }
     }
 
     /// The share of each patch's form-factor row that lands on the backs of sheets, per cell
@@ -516,18 +548,30 @@ impl<'a> Solver<'a> {
     }
 
     /// How the unshot radiosity of patch `src` varies over it (its elements' unshot power over
-    /// their areas, channels summed), or `None` when it is uniform.
-    fn source_density(&self, src: usize) -> Option<SourceDensity> {
-        let parts: Vec<(Tri, f32)> = self
+    /// their areas), channels summed (`None` when it is uniform), and per channel when some
+    /// channel's departs from the sum's ([`channels_differ`]; `None` when none does).
+    fn source_densities(
+        &self,
+        src: usize,
+    ) -> (Option<SourceDensity>, Option<[Option<SourceDensity>; 3]>) {
+        let parts: Vec<(Tri, [f32; 4])> = self
             .mesh
             .elements
             .iter()
             .zip(&self.element_unshot)
             .zip(&self.element_area)
             .filter(|((e, _), _)| e.patch as usize == src)
-            .map(|((e, u), &a)| (self.mesh.tri(e), (u.element_sum() / a.max(1e-300)) as f32))
+            .map(|((e, u), &a)| {
+                let a = a.max(1e-300);
+                let d = [u.element_sum(), u.x, u.y, u.z].map(|x| (x / a) as f32);
+                (self.mesh.tri(e), d)
+            })
             .collect();
-        SourceDensity::of_parts(&self.mesh.patches[src], DENSITY_GRID, &parts)
+        let [sum, r, g, b] =
+            SourceDensity::of_parts_sets(&self.mesh.patches[src], DENSITY_GRID, &parts);
+        let channels = [r, g, b];
+        let apart = channels_differ(sum.as_ref(), &channels);
+        (sum, apart.then_some(channels))
     }
 
     /// Shadow rays per far form factor ([`FormFactorConfig::far_rays`]) for a shot of `shot`
@@ -567,48 +611,95 @@ impl<'a> Solver<'a> {
     fn shoot_all(
         &mut self,
         src: usize,
-        density: Option<&SourceDensity>,
+        densities: &ShotDensities,
         config: &FormFactorConfig,
-    ) -> Vec<f32> {
+    ) -> Factors {
         let points: Vec<SamplePoint> = self.mesh.vertices.iter().map(SamplePoint::from).collect();
-        self.shoot_points(src, density, &points, config)
+        self.shoot_points(src, densities, &points, config)
     }
 
     fn shoot_points(
         &mut self,
         src: usize,
-        density: Option<&SourceDensity>,
+        densities: &ShotDensities,
         points: &[SamplePoint],
         config: &FormFactorConfig,
-    ) -> Vec<f32> {
+    ) -> Factors {
+        match densities.channels {
+            None => {
+                let sum = densities.sum;
+                let mut stats = crate::kernels::BatchStats::default();
+                let sum =
+                    self.shoot_batches(src, points, &mut stats, |source, chunk, seed, out| {
+                        shoot_batch_visibility(source.0, source.1, sum, chunk, config, seed, out)
+                    });
+                self.count(stats);
+                Factors {
+                    sum,
+                    channels: None,
+                }
+            }
+            Some([r, g, b]) => {
+                let set = DensitySet::new([densities.sum, r, g, b]);
+                let mut stats = crate::kernels::BatchStats::default();
+                let sets =
+                    self.shoot_batches(src, points, &mut stats, |source, chunk, seed, out| {
+                        shoot_batch_sets(source.0, source.1, &set, chunk, config, seed, out)
+                    });
+                self.count(stats);
+                Factors {
+                    sum: sets.iter().map(|f| f[0]).collect(),
+                    channels: Some(sets.into_iter().map(|[_, r, g, b]| [r, g, b]).collect()),
+                }
+            }
+        }
+    }
+
+    /// Runs `batch` over `points` in batches of [`RECEIVER_BATCH`] (in parallel), each with
+    /// the octree (none where the scene needs no shadow rays), the source patch `src` and its
+    /// batch's seed ([`receiver_seed`]); returns its outputs in order and adds up its
+    /// counts into `stats`.
+    fn shoot_batches<T: Clone + Default + Send>(
+        &self,
+        src: usize,
+        points: &[SamplePoint],
+        stats: &mut crate::kernels::BatchStats,
+        batch: impl Fn(
+            (Option<&Octree>, &Tri),
+            &[SamplePoint],
+            u64,
+            &mut [T],
+        ) -> crate::kernels::BatchStats
+        + Sync,
+    ) -> Vec<T> {
         let source = self.mesh.patches[src];
         let seed = self.config.seed ^ (self.stats.shots << 20) ^ src as u64;
         let octree = self.stages.shadow_rays.then_some(&self.octree);
-        let chunks: Vec<(Vec<f32>, crate::kernels::BatchStats)> = points
+        let chunks: Vec<(Vec<T>, crate::kernels::BatchStats)> = points
             .par_chunks(RECEIVER_BATCH)
             .enumerate()
             .map(|(i, chunk)| {
-                let mut out = vec![0.0; chunk.len()];
-                let stats = shoot_batch_visibility(
-                    octree,
-                    &source,
-                    density,
-                    chunk,
-                    config,
-                    receiver_seed(seed, i * RECEIVER_BATCH).0,
-                    &mut out,
-                );
+                let mut out = vec![T::default(); chunk.len()];
+                let seed = receiver_seed(seed, i * RECEIVER_BATCH).0;
+                let stats = batch((octree, &source), chunk, seed, &mut out);
                 (out, stats)
             })
             .collect();
         let mut factors = Vec::with_capacity(points.len());
         for (f, s) in chunks {
             factors.extend(f);
-            self.stats.form_factors += s.form_factors;
-            self.stats.rays += s.rays;
-            self.stats.analytic_form_factors += s.analytic;
+            stats.form_factors += s.form_factors;
+            stats.rays += s.rays;
+            stats.analytic += s.analytic;
         }
         factors
+    }
+
+    /// Adds a shot's batch counts to the solve's.
+    fn count(&mut self, s: crate::kernels::BatchStats) {
+        self.stats.form_factors += s.form_factors;
+        self.stats.rays += s.rays;
+        self.stats.analytic_form_factors += s.analytic;
     }
 
     /// Adaptive subdivision for this shot: split edges whose form factors differ strongly and
@@ -616,11 +707,11 @@ impl<'a> Solver<'a> {
     fn refine(
         &mut self,
         src: usize,
-        mut factors: Vec<f32>,
+        mut factors: Factors,
         shot: DVec3,
-        density: Option<&SourceDensity>,
+        densities: &ShotDensities,
         config: &FormFactorConfig,
-    ) -> Vec<f32> {
+    ) -> Factors {
         let Some(adapt) = self.config.adapt else {
             return factors;
         };
@@ -631,7 +722,7 @@ impl<'a> Solver<'a> {
         let budget = adapt.max_vertices.max(self.mesh.vertices.len());
         let db = (shot / self.patch_area[src]).as_vec3().element_sum();
         for _ in 0..adapt.passes {
-            let mut candidates = self.refinement_candidates(&factors, db, &adapt);
+            let mut candidates = self.refinement_candidates(&factors.sum, db, &adapt);
             let room = budget.saturating_sub(self.mesh.vertices.len());
             if candidates.is_empty() || room == 0 {
                 break;
@@ -641,10 +732,11 @@ impl<'a> Solver<'a> {
                 .iter()
                 .map(|&(a, b)| self.midpoint(a, b))
                 .collect();
-            let mid_f = self.shoot_points(src, density, &mids, config);
+            let mid_f = self.shoot_points(src, densities, &mids, config);
             let mut split = 0;
-            for (&(a, b), (m, fm)) in candidates.iter().zip(mids.iter().zip(mid_f)) {
-                let (fa, fb) = (factors[a as usize], factors[b as usize]);
+            for (k, (&(a, b), m)) in candidates.iter().zip(&mids).enumerate() {
+                let fm = mid_f.sum[k];
+                let (fa, fb) = (factors.sum[a as usize], factors.sum[b as usize]);
                 let (ia, ib) = (
                     self.irradiance[a as usize].element_sum(),
                     self.irradiance[b as usize].element_sum(),
@@ -655,7 +747,10 @@ impl<'a> Solver<'a> {
                 }
                 let v = self.split_edge_at_midpoint(a, b);
                 debug_assert_eq!(self.mesh.vertices[v as usize].pos, Vec3::from(m.pos));
-                factors.push(fm);
+                factors.sum.push(fm);
+                if let (Some(all), Some(mid)) = (factors.channels.as_mut(), &mid_f.channels) {
+                    all.push(mid[k]);
+                }
                 split += 1;
             }
             if split == 0 {
@@ -734,17 +829,39 @@ impl<'a> Solver<'a> {
     }
 
     /// Books one shot: irradiance at sample points, power into elements, unshot and absorbed.
-    fn book(&mut self, _src: usize, shot: DVec3, delta_b: Vec3, factors: &[f32]) {
-        for (h, &f) in self.irradiance.iter_mut().zip(factors) {
-            *h += delta_b * f;
+    /// Each channel takes its own factors when the channels shoot apart ([`Factors`]).
+    fn book(&mut self, _src: usize, shot: DVec3, delta_b: Vec3, factors: &Factors) {
+        match &factors.channels {
+            None => {
+                for (h, &f) in self.irradiance.iter_mut().zip(&factors.sum) {
+                    *h += delta_b * f;
+                }
+            }
+            Some(per) => {
+                for (h, f) in self.irradiance.iter_mut().zip(per) {
+                    *h += delta_b * Vec3::from(*f);
+                }
+            }
         }
         let db = delta_b.as_dvec3();
         let mut received = DVec3::ZERO;
         let mut absorbed = DVec3::ZERO;
         let elements = self.mesh.elements.iter().zip(&self.element_area);
         for ((e, &area), u) in elements.zip(&mut self.element_unshot) {
-            let f = e.v.iter().map(|&v| factors[v as usize] as f64).sum::<f64>() / 3.0;
-            let power = db * (f * area);
+            let power = match &factors.channels {
+                None => {
+                    let f =
+                        e.v.iter()
+                            .map(|&v| factors.sum[v as usize] as f64)
+                            .sum::<f64>()
+                            / 3.0;
+                    db * (f * area)
+                }
+                Some(per) => {
+                    let f = e.v.iter().map(|&v| Vec3::from(per[v as usize]).as_dvec3());
+                    db * (f.sum::<DVec3>() / 3.0 * area)
+                }
+            };
             let rho = self.scene.objects[e.object as usize].reflectance.as_dvec3();
             received += power;
             absorbed += power * (DVec3::ONE - rho);

@@ -282,3 +282,92 @@ fn the_cornell_red_wall_does_not_light_itself() {
         );
     }
 }
+
+#[test]
+fn a_shot_weighed_per_channel_gives_each_channel_what_its_own_density_would() {
+    // The solver shoots a patch whose channels are spread differently with the four densities
+    // (the channels summed and each channel) in one pass over the same samples and shadow rays
+    // (`shoot_batch_sets`); a node program gets the same by calling the one-density kernels
+    // once per density. Each of the four must be exactly the one-density answer, near and far
+    // receivers, some behind an occluder, with all rays and with fewer far ones.
+    use occ_radiosity::formfactor::{DensitySet, SourceDensity, channels_differ, receiver_rays};
+    use occ_radiosity::kernels::{shoot_batch_sets, shoot_batch_weighted};
+    let src = Tri::new(
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(0.0, 1.0, 1.0),
+    );
+    let src = if src.normal().y < 0.0 {
+        src
+    } else {
+        Tri::new(src.v[0], src.v[2], src.v[1])
+    };
+    let parts: Vec<(Tri, [f32; 4])> = (src.split(2).into_iter().enumerate())
+        .map(|(k, t)| {
+            let (r, g, b) = (
+                1.0 + (k % 3) as f32,
+                1.0 + (k % 5) as f32,
+                0.5 + (k % 2) as f32,
+            );
+            (t, [r + g + b, r, g, b])
+        })
+        .collect();
+    let densities = SourceDensity::of_parts_sets(&src, 24, &parts);
+    for (j, d) in densities.iter().enumerate() {
+        let one: Vec<(Tri, f32)> = parts.iter().map(|(t, v)| (*t, v[j])).collect();
+        assert_eq!(d, &SourceDensity::of_parts(&src, 24, &one), "density {j}");
+    }
+    let [sum, r, g, b] = densities.clone();
+    assert!(channels_differ(sum.as_ref(), &[r, g, b]));
+    let occluder = Tri::new(
+        Vec3::new(0.2, 0.5, 0.2),
+        Vec3::new(0.6, 0.5, 0.2),
+        Vec3::new(0.2, 0.5, 0.6),
+    );
+    let octree = Octree::build(&[src, occluder], OctreeConfig::default());
+    let points: Vec<SamplePoint> = (0..40)
+        .map(|i| {
+            let p = Vec3::new(-1.0 + 0.08 * i as f32, 0.02 + 0.13 * (i % 7) as f32, 0.3);
+            SamplePoint {
+                pos: p.to_array(),
+                normal: Vec3::Y.to_array(),
+                eval: p.to_array(),
+            }
+        })
+        .collect();
+    // Near and far receivers both (with one far ray: 16 rays near, 1 far).
+    let few = FormFactorConfig {
+        rays: 16,
+        far_rays: 1,
+        ..FormFactorConfig::default()
+    };
+    let rays: Vec<u32> = (points.iter())
+        .map(|p| receiver_rays(Vec3::from(p.eval), Vec3::Y, &src, &few))
+        .collect();
+    assert!(rays.contains(&16) && rays.contains(&1), "{rays:?}");
+    let set = DensitySet::new(densities.each_ref().map(Option::as_ref));
+    for far_rays in [0, 1, 4] {
+        let config = FormFactorConfig {
+            rays: 16,
+            far_rays,
+            ..FormFactorConfig::default()
+        };
+        let mut together = vec![[0.0f32; 4]; points.len()];
+        shoot_batch_sets(
+            Some(&octree),
+            &src,
+            &set,
+            &points,
+            &config,
+            9,
+            &mut together,
+        );
+        for (j, d) in densities.iter().enumerate() {
+            let mut alone = vec![0.0f32; points.len()];
+            shoot_batch_weighted(&octree, &src, d.as_ref(), &points, &config, 9, &mut alone);
+            let column: Vec<f32> = together.iter().map(|f| f[j]).collect();
+            assert_eq!(column, alone, "density {j}, far rays {far_rays}");
+            assert!(alone.iter().any(|&f| f > 0.0));
+        }
+    }
+}
