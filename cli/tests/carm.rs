@@ -28,13 +28,16 @@ fn radiosity(out: &Path, extra: &[&str]) -> serde_json::Value {
 }
 
 /// carm.occ on 4 nodes (`--threads 1`) and the reference solver, both with `extra`, into
-/// scratch folders named after `name`; returns their reports (carm's first).
+/// scratch folders named after `name`; returns their reports (carm's first). Both shoot every
+/// channel from the channels' summed density (`--summed-density`: carm.occ's shots), so that
+/// they make the same shots.
 fn carm_and_reference(name: &str, extra: &[&str]) -> (serde_json::Value, serde_json::Value) {
     let carm_flags = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
-    let carm = radiosity(&scratch(name), &[&carm_flags[..], extra].concat());
+    let summed = ["--summed-density"];
+    let carm = radiosity(&scratch(name), &[&carm_flags[..], &summed, extra].concat());
     let reference = radiosity(
         &scratch(&format!("{name}-reference")),
-        &[&["--solver", "reference"][..], extra].concat(),
+        &[&["--solver", "reference"][..], &summed, extra].concat(),
     );
     (carm, reference)
 }

@@ -181,6 +181,10 @@ pub struct SolverConfig {
     /// not depend on it (every ray is tested against every triangle it could meet), only the
     /// time a ray takes and, for carm.occ, how finely the geometry can be spread over nodes.
     pub octree: OctreeConfig,
+    /// Each channel of a shot from where its own unshot power lies over the source when the
+    /// channels lie differently ([`channels_differ`]); false: every channel from the
+    /// channels' summed density, as carm.occ shoots (programs/README.md, "Not there yet").
+    pub channel_densities: bool,
 }
 
 impl Default for SolverConfig {
@@ -197,6 +201,7 @@ impl Default for SolverConfig {
             all_stages: false,
             record_every: 0.05,
             octree: OctreeConfig::default(),
+            channel_densities: true,
         }
     }
 }
@@ -570,7 +575,7 @@ impl<'a> Solver<'a> {
         let [sum, r, g, b] =
             SourceDensity::of_parts_sets(&self.mesh.patches[src], DENSITY_GRID, &parts);
         let channels = [r, g, b];
-        let apart = channels_differ(sum.as_ref(), &channels);
+        let apart = self.config.channel_densities && channels_differ(sum.as_ref(), &channels);
         (sum, apart.then_some(channels))
     }
 
