@@ -594,7 +594,6 @@ fn facing_receiver_rays(
     config: &FormFactorConfig,
     out: &mut [f32],
 ) -> Word {
-    empty_rays(samples, out);
     let ns = tri.normal();
     let origin = p + n * config.offset;
     let mut cast = 0;
@@ -603,12 +602,13 @@ fn facing_receiver_rays(
         let len = r.length_squared().sqrt();
         let (cos1, cos2) = (n.dot(r) / len, -ns.dot(r) / len);
         if cos1 <= 0.0 || cos2 <= 0.0 {
+            empty_rays(&[x], ray);
             continue;
         }
         let d = x + ns * config.offset - origin;
-        ray[..3].copy_from_slice(&origin.to_array());
-        ray[3..6].copy_from_slice(&d.to_array());
-        ray[7] = 1.0;
+        let [ox, oy, oz] = origin.to_array();
+        let [dx, dy, dz] = d.to_array();
+        ray.copy_from_slice(&[ox, oy, oz, dx, dy, dz, 0.0, 1.0]);
         cast += 1;
     }
     cast
@@ -617,8 +617,8 @@ fn facing_receiver_rays(
 /// Empty rays, one a sample (`RAY_FLOATS` floats: the sample, then zeros), as far as `out` goes.
 fn empty_rays(samples: &[Vec3], out: &mut [f32]) {
     for (ray, x) in out.chunks_exact_mut(RAY_FLOATS).zip(samples) {
-        ray.fill(0.0);
-        ray[..3].copy_from_slice(&x.to_array());
+        let [x, y, z] = x.to_array();
+        ray.copy_from_slice(&[x, y, z, 0.0, 0.0, 0.0, 0.0, 0.0]);
     }
 }
 
