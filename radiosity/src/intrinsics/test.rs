@@ -277,12 +277,14 @@ fn rays_are_the_ones_the_form_factor_asks_about() {
         ..FormFactorConfig::default()
     };
     let (mut partial, mut none) = (0, 0);
-    for _ in 0..2000 {
+    for i in 0..2000 {
         let mut v = || Vec3::new(coord(), coord(), coord());
         let src = Tri::new(v(), v(), v());
         let (p, n) = (v(), v().normalize_or_zero());
         let mut samples = Vec::new();
-        source_samples(&src, 16, &mut Pcg32::new(9, SAMPLE_STREAM), &mut samples);
+        // 16, 9, 4 and 1 samples: whole and partial groups of lanes
+        let m = [16, 9, 4, 1][i % 4];
+        source_samples(&src, m, &mut Pcg32::new(9, SAMPLE_STREAM), &mut samples);
         let mut rays = vec![7.0f32; RAY_FLOATS * samples.len()];
         let cast = receiver_rays(p, n, &src, &samples, &config, &mut rays);
         let mut asked = vec![None; samples.len()];
