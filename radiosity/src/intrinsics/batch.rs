@@ -46,6 +46,8 @@ struct RaysOut<'a> {
 /// The settings of a shot that every receiver of `RAD.RECEIVERS.RAYS` shares.
 struct Shot<'a> {
     tri: Tri,
+    /// The source's normal (`tri.normal()`, once for every receiver).
+    normal: Vec3,
     config: FormFactorConfig,
     density: Option<SourceDensity<&'a [f32]>>,
     seed: u64,
@@ -133,6 +135,7 @@ pub unsafe extern "C" fn receivers_rays(
         && (grid.is_empty() || density.is_some());
     let shot = tri.filter(|_| valid).map(|tri| Shot {
         tri,
+        normal: tri.normal(),
         config: FormFactorConfig {
             rays: rays as u32,
             far_rays: far as u32,
@@ -200,8 +203,8 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
         if m > 0 {
             // (samples were drawn, so the receiver faces the source)
             let ray_floats = &mut out.rays[RAY_FLOATS * at..RAY_FLOATS * (at + m)];
-            let (tri, config) = (&shot.tri, &shot.config);
-            cast += facing_receiver_rays(p, n, tri, &samples[..m], config, ray_floats);
+            let (ns, config) = (shot.normal, &shot.config);
+            cast += facing_receiver_rays(p, n, ns, &samples[..m], config, ray_floats);
         }
         out.blocked[at..at + m].fill(0);
         for c in out.cursor[CURSOR_INTS * at..CURSOR_INTS * (at + m)].chunks_exact_mut(CURSOR_INTS)

@@ -573,7 +573,7 @@ fn receiver_rays(
     out: &mut [f32],
 ) -> Word {
     if faces(p, n, tri) {
-        facing_receiver_rays(p, n, tri, samples, config, out)
+        facing_receiver_rays(p, n, tri.normal(), samples, config, out)
     } else {
         empty_rays(samples, out);
         0
@@ -581,20 +581,19 @@ fn receiver_rays(
 }
 
 /// [`receiver_rays`] for a receiver known to face the source (one that
-/// [`crate::formfactor::receiver_samples`] drew samples for): the rays that
-/// [`form_factor_with`] asks about, written without computing the form factor. A sample gets a
-/// ray when it lies above the receiver's horizon and in front of the source, tested as the
-/// kernel tests it (`test::rays_are_the_ones_the_form_factor_asks_about` holds the two to the
-/// same rays, bit for bit).
+/// [`crate::formfactor::receiver_samples`] drew samples for), whose normal is `ns`: the rays
+/// that [`form_factor_with`] asks about, written without computing the form factor. A sample
+/// gets a ray when it lies above the receiver's horizon and in front of the source, tested as
+/// the kernel tests it (`test::rays_are_the_ones_the_form_factor_asks_about` holds the two to
+/// the same rays, bit for bit).
 fn facing_receiver_rays(
     p: Vec3,
     n: Vec3,
-    tri: &Tri,
+    ns: Vec3,
     samples: &[Vec3],
     config: &FormFactorConfig,
     out: &mut [f32],
 ) -> Word {
-    let ns = tri.normal();
     let origin = p + n * config.offset;
     let mut cast = 0;
     for (&x, ray) in samples.iter().zip(out.chunks_exact_mut(RAY_FLOATS)) {
