@@ -29,7 +29,9 @@
 //!
 //! At every loop back-edge compiled code loads the `u32` at `node + YIELD_FLAG_OFFSET`; if it is
 //! non-zero it stores the resume index of the loop head into `ws[slot::IPTR]` and calls
-//! `rt_timeslice`, returning if the status is non-zero.
+//! `rt_timeslice`, returning if the status is non-zero. Except when it is [`yield_flag::COUNT`]
+//! (timeslicing by count): then it first decrements the `u32` at `node +
+//! NODE_POLLS_LEFT_OFFSET`, and goes on to the loop head without a call unless that reached 0.
 //!
 //! # Frame chain (blocking PROC calls)
 //!
@@ -84,7 +86,11 @@
 //! L1:
 //!   ws[IPTR] = 2; st = rt_out(node, ws, ws[1], &ws[2], 8); if st != 0: return st
 //! L2:                                                    ; loop back-edge: the poll
-//!   if load.u32(node + YIELD_FLAG_OFFSET) != 0:
+//!   flag = load.u32(node + YIELD_FLAG_OFFSET)
+//!   if flag != 0:
+//!     if flag == yield_flag::COUNT:
+//!       left = load.u32(node + NODE_POLLS_LEFT_OFFSET) - 1; store it back
+//!       if left != 0: jump HEAD
 //!     ws[IPTR] = 0; st = rt_timeslice(node, ws); if st != 0: return st
 //!   jump HEAD
 //! ```
@@ -147,6 +153,23 @@ pub const fn word_offset(w: isize) -> i32 {
 
 /// Byte offset, from the `node` pointer, of the `u32` timeslice/preemption flag.
 pub const YIELD_FLAG_OFFSET: i32 = 0;
+
+/// Byte offset, from the `node` pointer, of the `u32` count of back-edge polls left before the
+/// next counted timeslice (see [`yield_flag::COUNT`]).
+pub const NODE_POLLS_LEFT_OFFSET: i32 = std::mem::offset_of!(Node, polls_left) as i32;
+
+/// The values of the yield flag at [`YIELD_FLAG_OFFSET`].
+pub mod yield_flag {
+    /// Nothing to do: the back-edge poll falls through to the loop head.
+    pub const CLEAR: u32 = 0;
+    /// A timeslice (the shared ticker), a preemption (a high-priority process became ready) or
+    /// a stop is requested: the poll calls `rt_timeslice`.
+    pub const REQUEST: u32 = 1;
+    /// Timeslicing by count, at low priority: the poll decrements the `u32` at
+    /// [`super::NODE_POLLS_LEFT_OFFSET`] and calls `rt_timeslice` only when it reaches 0
+    /// (every `NodeConfig::counted_slices`-th poll), so that counting costs no call.
+    pub const COUNT: u32 = 2;
+}
 
 /// Byte offset, from the `node` pointer, of the node's address base (a word): the start of its
 /// first workspace chunk. `ASM` blocks see an address as a 32-bit INT, its signed byte offset

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
-use crate::abi::{NOT_PROCESS, ProcFn, Word, Wptr, priority, slot};
+use crate::abi::{NOT_PROCESS, ProcFn, Word, Wptr, priority, slot, yield_flag};
 use crate::arena::Arena;
 use crate::endpoint::Endpoint;
 use crate::error::{Halt, RunError};
@@ -31,6 +31,13 @@ pub struct NodeConfig {
     pub counted_slices: Option<u32>,
     /// The node's name in reports (`node 3`); empty for a lone node.
     pub name: String,
+}
+
+impl NodeConfig {
+    /// The low-priority back-edge polls between two counted timeslices (at least 1).
+    pub(crate) fn polls_per_slice(&self) -> u32 {
+        self.counted_slices.unwrap_or(1).max(1)
+    }
 }
 
 impl Default for NodeConfig {
@@ -58,10 +65,16 @@ pub(crate) struct Queue {
 pub struct Node {
     /// Timeslice / preemption flag polled by compiled code at [`crate::abi::YIELD_FLAG_OFFSET`].
     pub(crate) yield_flag: AtomicU32,
-    /// The yield flag's resting value: 0, or 1 when timeslicing by count, so that every
-    /// back-edge poll reaches `rt_timeslice`, which counts. Kept beside the flag (read at
-    /// every switch to low priority) rather than derived from the config each time.
+    /// The yield flag's resting value at low priority: [`yield_flag::CLEAR`], or
+    /// [`yield_flag::COUNT`] when timeslicing by count, so that every back-edge poll counts
+    /// down `polls_left`. Kept beside the flag (read at every switch to low priority) rather
+    /// than derived from the config each time.
     pub(crate) flag_rest: u32,
+    /// When timeslicing by count: the low-priority back-edge polls left before the next
+    /// counted timeslice, counted down by compiled code at
+    /// [`crate::abi::NODE_POLLS_LEFT_OFFSET`] (and by `rt_timeslice` for a poll that a
+    /// request sent there instead); never 0 between polls.
+    pub(crate) polls_left: u32,
     /// Priority of the running process.
     pub(crate) cur_pri: Word,
     /// Run queues, indexed by priority.
@@ -98,8 +111,6 @@ pub struct Node {
     pub(crate) placement: Option<crate::placement::Placement>,
     /// Timeslices taken since the node last had its turn on a pool thread.
     pub(crate) slices: u32,
-    /// Back-edge polls since the last counted timeslice.
-    pub(crate) polls: u32,
     /// Set by a timeslice when the node has had its turn: the pool gives the thread to another.
     pub(crate) give_way: bool,
     /// Whether a thread pool runs the node (so it gives way after [`crate::pool::TURN_SLICES`]).
@@ -118,8 +129,12 @@ impl Node {
     /// and host I/O.
     pub fn new(config: NodeConfig, program: Arc<ProgramInfo>, host: HostIo) -> Box<Node> {
         Box::new(Node {
-            yield_flag: AtomicU32::new(0),
-            flag_rest: u32::from(config.counted_slices.is_some()),
+            yield_flag: AtomicU32::new(yield_flag::CLEAR),
+            flag_rest: match config.counted_slices {
+                Some(_) => yield_flag::COUNT,
+                None => yield_flag::CLEAR,
+            },
+            polls_left: config.polls_per_slice(),
             cur_pri: priority::LOW,
             queues: [Queue::empty(), Queue::empty()],
             interrupted: std::ptr::null_mut(),
@@ -140,7 +155,6 @@ impl Node {
             config,
             placement: None,
             slices: 0,
-            polls: 0,
             give_way: false,
             pooled: false,
             busy: std::time::Duration::ZERO,
@@ -268,10 +282,15 @@ impl Node {
         self.config.timeslice && self.config.counted_slices.is_none()
     }
 
-    /// The yield flag's resting value (see the `flag_rest` field).
+    /// The yield flag's resting value at the running priority: [`yield_flag::CLEAR`] at high
+    /// priority (never timesliced, and its polls are not counted), else the `flag_rest` field.
     #[inline(always)]
     pub(crate) fn flag_rest(&self) -> u32 {
-        self.flag_rest
+        if self.cur_pri == priority::HIGH {
+            yield_flag::CLEAR
+        } else {
+            self.flag_rest
+        }
     }
 
     /// The program tables used in reports.
@@ -286,7 +305,8 @@ impl Node {
 
     /// Sets the yield flag, as the ticker does (for tests and embedders).
     pub fn request_yield(&self) {
-        self.yield_flag.store(1, Ordering::Relaxed);
+        self.yield_flag
+            .store(yield_flag::REQUEST, Ordering::Relaxed);
     }
 }
 

@@ -108,7 +108,9 @@ impl PoolShared {
         for &f in &self.flags {
             // SAFETY: every node of the pool is alive (boxed, owned by a slot or a worker)
             // until `run_pool` returns.
-            unsafe { (*(f as *const AtomicU32)).store(1, Ordering::Relaxed) };
+            unsafe {
+                (*(f as *const AtomicU32)).store(crate::abi::yield_flag::REQUEST, Ordering::Relaxed)
+            };
         }
     }
 }

@@ -14,7 +14,7 @@
 
 use std::sync::atomic::Ordering;
 
-use crate::abi::{NOT_PROCESS, ProcFn, Status, Word, Wptr, priority, slot};
+use crate::abi::{NOT_PROCESS, ProcFn, Status, Word, Wptr, priority, slot, yield_flag};
 use crate::error::{ErrorKind, RunError};
 use crate::frame::{get, pri, set, wptr};
 use crate::node::Node;
@@ -50,7 +50,8 @@ impl Node {
         // SAFETY: descriptors on channels, timers and joins are live workspaces of this node.
         unsafe { self.enqueue(wptr(desc), p) };
         if p == priority::HIGH && self.cur_pri == priority::LOW {
-            self.yield_flag.store(1, Ordering::Relaxed);
+            self.yield_flag
+                .store(yield_flag::REQUEST, Ordering::Relaxed);
         }
     }
 
@@ -132,7 +133,7 @@ impl Node {
                 // preempts it, so it waits in the interrupted slot.
                 self.interrupted = wptr(d);
             } else {
-                self.cur_pri = pri(d);
+                self.run_at(pri(d));
                 return Some(wptr(d));
             }
         }
@@ -150,11 +151,23 @@ impl Node {
         next
     }
 
+    /// Switches the running priority to `p`. When it changes, the yield flag takes its resting
+    /// value at `p`, so that timeslicing by count counts low-priority polls only (a request
+    /// pending at the old priority is dropped, as the high priority never acts on one and the
+    /// low priority gets one at its next tick or count).
+    #[inline(always)]
+    fn run_at(&mut self, p: Word) {
+        if self.cur_pri != p {
+            self.cur_pri = p;
+            self.yield_flag.store(self.flag_rest(), Ordering::Relaxed);
+        }
+    }
+
     /// Takes the next frame from the high queue, the interrupted slot or the low queue.
     #[inline(always)]
     fn dequeue_next(&mut self) -> Option<Wptr> {
         if let Some(ws) = self.dequeue(priority::HIGH) {
-            self.cur_pri = priority::HIGH;
+            self.run_at(priority::HIGH);
             return Some(ws);
         }
         self.cur_pri = priority::LOW;
@@ -288,15 +301,17 @@ impl Node {
     }
 }
 
-/// Back-edge poll target, called when the yield flag is set.
+/// Back-edge poll target, called when the yield flag is set (when it is
+/// [`yield_flag::COUNT`], only when the polls left reach 0).
 ///
 /// Resets the flag. At high priority: `DONE` (high processes are never timesliced). At low
 /// priority: preempted into the interrupted slot if a high process is ready; when a thread pool
 /// runs the node and it has had its turn (`pool::TURN_SLICES` timeslices), put at the
 /// back of the low queue with the node giving way; put at the back of the low queue if anything
 /// else could run; otherwise `DONE`. When timeslicing by count, only every
-/// [`crate::NodeConfig::counted_slices`]-th call is a timeslice (the others only check for a
-/// ready high process). A node whose network has stopped halts here.
+/// [`crate::NodeConfig::counted_slices`]-th low-priority poll is a timeslice: one that a
+/// request sent here counts itself, and unless it is that one, only checks for a ready high
+/// process. A node whose network has stopped halts here.
 ///
 /// # Safety
 /// `node` is the running node and `ws` the calling frame, its `IPTR` holding the loop-head index.
@@ -310,12 +325,16 @@ pub unsafe extern "C" fn rt_timeslice(node: *mut Node, ws: Wptr) -> Status {
     if node.cur_pri == priority::HIGH {
         return Status::DONE;
     }
-    if let Some(every) = node.config.counted_slices {
-        node.polls += 1;
-        if node.polls < every {
+    if node.config.counted_slices.is_some() {
+        // Compiled code counted this poll and called when none were left, or a request sent
+        // it here uncounted.
+        if node.polls_left != 0 {
+            node.polls_left -= 1;
+        }
+        if node.polls_left != 0 {
             return node.continue_or_preempt(ws);
         }
-        node.polls = 0;
+        node.polls_left = node.config.polls_per_slice();
     }
     if node.network_stopped() {
         // SAFETY: `ws` is the running frame.

@@ -43,7 +43,10 @@ fn tick_loop() {
             for &f in flags.iter() {
                 // SAFETY: a registered address is a node's AtomicU32 flag; the node unregisters
                 // (under this lock) before the flag can be freed.
-                unsafe { (*(f as *const AtomicU32)).store(1, Ordering::Relaxed) };
+                unsafe {
+                    (*(f as *const AtomicU32))
+                        .store(crate::abi::yield_flag::REQUEST, Ordering::Relaxed)
+                };
             }
             flags.is_empty()
         };

@@ -36,7 +36,7 @@ use occ_compiler::types::Type;
 use occ_grammar::ast::{self, Span};
 use occ_grammar::source_map::SourceMap;
 use occ_runtime::ErrorKind;
-use occ_runtime::abi::{Entry, Status, slot, word_offset};
+use occ_runtime::abi::{Entry, NODE_POLLS_LEFT_OFFSET, Status, slot, word_offset, yield_flag};
 use occ_runtime::program::{ChannelName, ProgramInfo};
 
 use crate::error::CodegenError;
@@ -499,10 +499,39 @@ impl<'p> Tr<'_, 'p> {
             self.node,
             occ_runtime::abi::YIELD_FLAG_OFFSET,
         );
-        let slow = self.b.create_block();
+        let (slow, count, call) = (
+            self.b.create_block(),
+            self.b.create_block(),
+            self.b.create_block(),
+        );
         self.b.ins().brif(flag, slow, &[], head, &[]);
+        // Timeslicing by count: one poll fewer left, and no call until none is.
         self.b.set_cold_block(slow);
         self.b.switch_to_block(slow);
+        let counting = self
+            .b
+            .ins()
+            .icmp_imm_s(IntCC::Equal, flag, i64::from(yield_flag::COUNT));
+        self.b.ins().brif(counting, count, &[], call, &[]);
+        self.b.set_cold_block(count);
+        self.b.switch_to_block(count);
+        let left = self.b.ins().load(
+            types::I32,
+            MemFlagsData::trusted(),
+            self.node,
+            NODE_POLLS_LEFT_OFFSET,
+        );
+        let left = self.b.ins().iadd_imm_s(left, -1);
+        self.b.ins().store(
+            MemFlagsData::trusted(),
+            left,
+            self.node,
+            NODE_POLLS_LEFT_OFFSET,
+        );
+        self.b.ins().brif(left, head, &[], call, &[]);
+        // A request, or the counted timeslice.
+        self.b.set_cold_block(call);
+        self.b.switch_to_block(call);
         let iv = self.iconst(idx);
         self.store_slot_at(self.ws, slot::IPTR, iv);
         let st = self.call_rt(Entry::Timeslice, &[self.node, self.ws]);

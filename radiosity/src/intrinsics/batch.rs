@@ -10,7 +10,9 @@
 use glam::Vec3;
 use occ_runtime::abi::Word;
 
-use super::{MAX_SAMPLES, RAY_FLOATS, SAMPLE_STREAM, array, array_mut, receiver_rays, triangle};
+use super::{
+    MAX_SAMPLES, RAY_FLOATS, SAMPLE_STREAM, array, array_mut, facing_receiver_rays, triangle,
+};
 use crate::formfactor::{
     FormFactorConfig, SourceDensity, form_factor_weighted, receiver_samples, sample_grid,
 };
@@ -44,6 +46,8 @@ struct RaysOut<'a> {
 /// The settings of a shot that every receiver of `RAD.RECEIVERS.RAYS` shares.
 struct Shot<'a> {
     tri: Tri,
+    /// The source's normal (`tri.normal()`, once for every receiver).
+    normal: Vec3,
     config: FormFactorConfig,
     density: Option<SourceDensity<&'a [f32]>>,
     seed: u64,
@@ -131,6 +135,7 @@ pub unsafe extern "C" fn receivers_rays(
         && (grid.is_empty() || density.is_some());
     let shot = tri.filter(|_| valid).map(|tri| Shot {
         tri,
+        normal: tri.normal(),
         config: FormFactorConfig {
             rays: rays as u32,
             far_rays: far as u32,
@@ -196,8 +201,10 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
             out.weights[at..at + m].copy_from_slice(&weights[..m]);
         }
         if m > 0 {
+            // (samples were drawn, so the receiver faces the source)
             let ray_floats = &mut out.rays[RAY_FLOATS * at..RAY_FLOATS * (at + m)];
-            cast += receiver_rays(p, n, &shot.tri, &samples[..m], &shot.config, ray_floats);
+            let (ns, config) = (shot.normal, &shot.config);
+            cast += facing_receiver_rays(p, n, ns, &samples[..m], config, ray_floats);
         }
         out.blocked[at..at + m].fill(0);
         for c in out.cursor[CURSOR_INTS * at..CURSOR_INTS * (at + m)].chunks_exact_mut(CURSOR_INTS)
@@ -399,26 +406,33 @@ pub unsafe extern "C" fn corners_receive(
         && db.len() == 3
         && rho.len() == 3 * patches
         && received.len() == rho.len()
-        && point
-            .iter()
-            .all(|&p| (0..factor.len() as i64).contains(&i64::from(p)))
-        && patch
-            .iter()
-            .all(|&p| (0..patches as i64).contains(&i64::from(p)));
+        && indices_below(point, factor.len())
+        && indices_below(patch, patches);
     let written = if valid {
-        for c in 0..n {
-            let f = factor[point[c] as usize];
-            // A corner of weight 0 only keeps power for its element (adaptive subdivision).
-            if f == 0.0 || weight[c] == 0.0 {
-                continue;
+        let db = [db[0], db[1], db[2]].map(f64::from);
+        // A node's corners come patch by patch (but for those adaptive subdivision added), so
+        // a run of corners of one patch adds to its sums in registers instead of in memory: the
+        // same additions in the same order.
+        let mut start = 0;
+        for run in patch.chunk_by(|a, b| a == b) {
+            let at = 3 * run[0] as usize;
+            let mut sums = [received[at], received[at + 1], received[at + 2]];
+            let rho = [rho[at], rho[at + 1], rho[at + 2]].map(f64::from);
+            for c in start..start + run.len() {
+                let f = factor[point[c] as usize];
+                // A corner of weight 0 only keeps power for its element (adaptive subdivision).
+                if f == 0.0 || weight[c] == 0.0 {
+                    continue;
+                }
+                let w = f64::from(f) * weight[c];
+                for j in 0..3 {
+                    let power = db[j] * w;
+                    sums[j] += power;
+                    unshot[3 * c + j] += power * rho[j];
+                }
             }
-            let w = f64::from(f) * weight[c];
-            let at = 3 * patch[c] as usize;
-            for j in 0..3 {
-                let power = f64::from(db[j]) * w;
-                received[at + j] += power;
-                unshot[3 * c + j] += power * f64::from(rho[at + j]);
-            }
+            received[at..at + 3].copy_from_slice(&sums);
+            start += run.len();
         }
         n as Word
     } else {
@@ -466,9 +480,7 @@ pub unsafe extern "C" fn patches_take(
     let valid = received.len() % 3 == 0
         && got.len() >= patches.len()
         && packed.len() >= 3 * patches.len()
-        && patches
-            .iter()
-            .all(|&p| (0..n as i64).contains(&i64::from(p)));
+        && indices_below(patches, n);
     let written = if valid {
         let mut k = 0;
         for &p in patches {
@@ -518,11 +530,8 @@ pub unsafe extern "C" fn corners_row(
             array_mut(row, row_len),
         )
     };
-    let valid = weight.len() == point.len()
-        && !row.is_empty()
-        && point
-            .iter()
-            .all(|&p| (0..factor.len() as i64).contains(&i64::from(p)));
+    let valid =
+        weight.len() == point.len() && !row.is_empty() && indices_below(point, factor.len());
     let written = if valid {
         row[0] = point
             .iter()
@@ -535,6 +544,14 @@ pub unsafe extern "C" fn corners_row(
     };
     // SAFETY: the ABI passes a valid result address.
     unsafe { *count = written };
+}
+
+/// Whether every index is in `0..n`: one pass without early exit, which the compiler turns
+/// into vector compares (the booking intrinsics check tens of thousands a shot).
+fn indices_below(indices: &[i32], n: usize) -> bool {
+    indices
+        .iter()
+        .fold(true, |ok, &i| ok & ((i64::from(i) as u64) < n as u64))
 }
 
 #[cfg(test)]

@@ -20,7 +20,7 @@ use glam::Vec3;
 use occ_runtime::abi::Word;
 use occ_runtime::intrinsic::{Intrinsic, ParamKind::*};
 
-use crate::formfactor::{FormFactorConfig, form_factor_with, point_polygon};
+use crate::formfactor::{FormFactorConfig, faces, form_factor_with, point_polygon};
 use crate::geom::Tri;
 use crate::octree::VOXEL_TRI_FLOATS;
 use crate::packet::{LANES, RayQuery, TriPacket};
@@ -562,7 +562,8 @@ fn visible_form_factor(p: Vec3, n: Vec3, tri: &Tri, samples: &[Vec3], visible: &
 }
 
 /// Writes one receiver's shadow rays into `out` (`RAY_FLOATS` per sample, empty rays where none
-/// is cast) and returns how many are cast.
+/// is cast) and returns how many are cast: none when the receiver does not face the source
+/// ([`faces`]), else [`facing_receiver_rays`].
 fn receiver_rays(
     p: Vec3,
     n: Vec3,
@@ -571,23 +572,53 @@ fn receiver_rays(
     config: &FormFactorConfig,
     out: &mut [f32],
 ) -> Word {
-    for (ray, x) in out.chunks_exact_mut(RAY_FLOATS).zip(samples) {
-        ray.fill(0.0);
-        ray[..3].copy_from_slice(&x.to_array());
+    if faces(p, n, tri) {
+        facing_receiver_rays(p, n, tri.normal(), samples, config, out)
+    } else {
+        empty_rays(samples, out);
+        0
     }
+}
+
+/// [`receiver_rays`] for a receiver known to face the source (one that
+/// [`crate::formfactor::receiver_samples`] drew samples for), whose normal is `ns`: the rays
+/// that [`form_factor_with`] asks about, written without computing the form factor. A sample
+/// gets a ray when it lies above the receiver's horizon and in front of the source, tested as
+/// the kernel tests it (`test::rays_are_the_ones_the_form_factor_asks_about` holds the two to
+/// the same rays, bit for bit).
+fn facing_receiver_rays(
+    p: Vec3,
+    n: Vec3,
+    ns: Vec3,
+    samples: &[Vec3],
+    config: &FormFactorConfig,
+    out: &mut [f32],
+) -> Word {
+    let origin = p + n * config.offset;
     let mut cast = 0;
-    form_factor_with(p, n, tri, samples, config, |k, origin, dir, tmax| {
-        if let Some(ray) = out.get_mut(RAY_FLOATS * k..RAY_FLOATS * (k + 1)) {
-            ray[..3].copy_from_slice(&origin.to_array());
-            ray[3..6].copy_from_slice(&dir.to_array());
-            ray[6] = 0.0;
-            ray[7] = tmax;
-            cast += 1;
+    for (&x, ray) in samples.iter().zip(out.chunks_exact_mut(RAY_FLOATS)) {
+        let r = x - p;
+        let len = r.length_squared().sqrt();
+        let (cos1, cos2) = (n.dot(r) / len, -ns.dot(r) / len);
+        if cos1 <= 0.0 || cos2 <= 0.0 {
+            empty_rays(&[x], ray);
+            continue;
         }
-        // Every ray counts as blocked, so no value is computed: only the rays are wanted.
-        true
-    });
+        let d = x + ns * config.offset - origin;
+        let [ox, oy, oz] = origin.to_array();
+        let [dx, dy, dz] = d.to_array();
+        ray.copy_from_slice(&[ox, oy, oz, dx, dy, dz, 0.0, 1.0]);
+        cast += 1;
+    }
     cast
+}
+
+/// Empty rays, one a sample (`RAY_FLOATS` floats: the sample, then zeros), as far as `out` goes.
+fn empty_rays(samples: &[Vec3], out: &mut [f32]) {
+    for (ray, x) in out.chunks_exact_mut(RAY_FLOATS).zip(samples) {
+        let [x, y, z] = x.to_array();
+        ray.copy_from_slice(&[x, y, z, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    }
 }
 
 /// The receivers of a batch: `r` points and `r` normals (3r floats each, r ≥ 1).

@@ -265,6 +265,63 @@ fn shadow_rays_are_the_ones_the_form_factor_asks_for() {
     assert!(short.iter().all(|x| *x == 7.0));
 }
 
+/// Seeded: receivers all around random sources, many of them seeing only part of the source
+/// above their horizon, get from `receiver_rays` exactly the rays `form_factor_with` asks
+/// about, bit for bit, and an empty ray for every other sample.
+#[test]
+fn rays_are_the_ones_the_form_factor_asks_about() {
+    let mut rng = Pcg32::new(42, 7);
+    let mut coord = || 4.0 * rng.next_f32() - 2.0;
+    let config = FormFactorConfig {
+        offset: 1e-3,
+        ..FormFactorConfig::default()
+    };
+    let (mut partial, mut none) = (0, 0);
+    for i in 0..2000 {
+        let mut v = || Vec3::new(coord(), coord(), coord());
+        let src = Tri::new(v(), v(), v());
+        let (p, n) = (v(), v().normalize_or_zero());
+        let mut samples = Vec::new();
+        // 16, 9, 4 and 1 samples: whole and partial groups of lanes
+        let m = [16, 9, 4, 1][i % 4];
+        source_samples(&src, m, &mut Pcg32::new(9, SAMPLE_STREAM), &mut samples);
+        let mut rays = vec![7.0f32; RAY_FLOATS * samples.len()];
+        let cast = receiver_rays(p, n, &src, &samples, &config, &mut rays);
+        let mut asked = vec![None; samples.len()];
+        form_factor_with(p, n, &src, &samples, &config, |k, o, d, t| {
+            asked[k] = Some((o, d, t));
+            false
+        });
+        let want = asked.iter().flatten().count();
+        assert_eq!(cast as usize, want);
+        match want {
+            0 => none += 1,
+            w if w < samples.len() => partial += 1,
+            _ => {}
+        }
+        for (k, ray) in rays.chunks_exact(RAY_FLOATS).enumerate() {
+            let bits = |xs: &[f32]| xs.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            let expected: Vec<f32> = match asked[k] {
+                Some((o, d, t)) => [o.to_array(), d.to_array()]
+                    .concat()
+                    .into_iter()
+                    .chain([0.0, t])
+                    .collect(),
+                None => [samples[k].to_array(), [0.0; 3]]
+                    .concat()
+                    .into_iter()
+                    .chain([0.0, 0.0])
+                    .collect(),
+            };
+            assert_eq!(bits(ray), bits(&expected), "sample {k}");
+        }
+    }
+    assert!(
+        partial > 100 && none > 100,
+        "partial {partial}, none {none}"
+    );
+}
+
 #[test]
 fn form_factor_scales_with_the_visible_rays() {
     let tri = SOURCE;

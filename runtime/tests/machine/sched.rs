@@ -57,6 +57,41 @@ fn timeslicing_lets_two_busy_loops_progress() {
     );
 }
 
+/// Logs `tag * 100 + i` for i = 0 .. n - 1, polling after each.
+/// Locals: 0 log, 1 tag, 2 n, 3 i.
+unsafe extern "C" fn stepper(ws: Wptr, node: *mut Node) -> Status {
+    unsafe {
+        loop {
+            let i = *l(ws, 3);
+            if i == *l(ws, 2) {
+                return Status::DONE;
+            }
+            (*(*l(ws, 0) as *mut Vec<Word>)).push(*l(ws, 1) * 100 + i);
+            *l(ws, 3) = i + 1;
+            poll!(node, ws, 0);
+        }
+    }
+}
+
+#[test]
+fn counted_timeslices_come_every_so_many_polls() {
+    let config = occ_runtime::NodeConfig {
+        counted_slices: Some(3),
+        ..Default::default()
+    };
+    let mut node = Node::new(config, Default::default(), occ_runtime::HostIo::stdio());
+    let mut log: Vec<Word> = Vec::new();
+    let logp = &mut log as *mut Vec<Word> as Word;
+    spawn(&mut node, stepper, 4, &[logp, 1, 7, 0]);
+    spawn(&mut node, stepper, 4, &[logp, 2, 7, 0]);
+    node.run().unwrap();
+    // Every third poll of the node's low-priority processes is a timeslice.
+    let want = [
+        100, 101, 102, 200, 201, 202, 103, 104, 105, 203, 204, 205, 106, 206,
+    ];
+    assert_eq!(log, want);
+}
+
 /// Logs its tag, RESCHEDULEs, logs tag+10.
 unsafe extern "C" fn polite(ws: Wptr, node: *mut Node) -> Status {
     unsafe {

@@ -43,9 +43,16 @@ macro_rules! check {
 #[macro_export]
 macro_rules! poll {
     ($node:expr, $ws:expr, $k:expr) => {{
-        let flag =
-            ($node as *const u8).add(occ_runtime::abi::YIELD_FLAG_OFFSET as usize) as *const u32;
-        if std::ptr::read_volatile(flag) != 0 {
+        use occ_runtime::abi::{NODE_POLLS_LEFT_OFFSET, YIELD_FLAG_OFFSET, yield_flag};
+        let at = |offset: i32| ($node as *mut u8).add(offset as usize) as *mut u32;
+        let flag = std::ptr::read_volatile(at(YIELD_FLAG_OFFSET));
+        let mut call = flag != yield_flag::CLEAR;
+        if flag == yield_flag::COUNT {
+            let left = at(NODE_POLLS_LEFT_OFFSET);
+            *left -= 1;
+            call = *left == 0;
+        }
+        if call {
             $crate::common::set_iptr($ws, $k);
             $crate::check!(occ_runtime::sched::rt_timeslice($node, $ws));
         }
