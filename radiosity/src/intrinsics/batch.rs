@@ -18,7 +18,7 @@ use crate::formfactor::{
 };
 use crate::geom::Tri;
 use crate::octree::flat::{CURSOR_INTS, START};
-use crate::rng::Pcg32;
+use crate::rng::{Pcg32, SetStrides};
 use crate::solver::receiver_seed;
 
 /// Floats per receiver in the `points` array: position, normal, evaluation point (the layout
@@ -162,6 +162,7 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
     let (mut samples, mut weights) = (Vec::new(), Vec::new());
     let weighted = shot.density.is_some();
     let skip = 2 * u64::from(sample_grid(shot.config.rays)).pow(2);
+    let strides = SetStrides::new(&Pcg32::new(0, SAMPLE_STREAM), skip);
     let (mut at, mut cast, mut taken) = (0usize, 0, 0);
     let room = |at: usize, m: usize, out: &RaysOut| {
         let end = at + m;
@@ -178,7 +179,7 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
         let (p, n) = receiver(floats);
         let (seed, set) = receiver_seed(shot.seed, g as usize);
         let mut rng = Pcg32::new(seed, SAMPLE_STREAM);
-        rng.advance(set as u64 * skip);
+        rng.leap(strides.of(set));
         let density = shot.density.as_ref();
         receiver_samples(
             (p, n),
