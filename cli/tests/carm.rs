@@ -28,16 +28,13 @@ fn radiosity(out: &Path, extra: &[&str]) -> serde_json::Value {
 }
 
 /// carm.occ on 4 nodes (`--threads 1`) and the reference solver, both with `extra`, into
-/// scratch folders named after `name`; returns their reports (carm's first). Both shoot every
-/// channel from the channels' summed density (`--summed-density`: carm.occ's shots), so that
-/// they make the same shots.
+/// scratch folders named after `name`; returns their reports (carm's first).
 fn carm_and_reference(name: &str, extra: &[&str]) -> (serde_json::Value, serde_json::Value) {
     let carm_flags = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
-    let summed = ["--summed-density"];
-    let carm = radiosity(&scratch(name), &[&carm_flags[..], &summed, extra].concat());
+    let carm = radiosity(&scratch(name), &[&carm_flags[..], extra].concat());
     let reference = radiosity(
         &scratch(&format!("{name}-reference")),
-        &[&["--solver", "reference"][..], &summed, extra].concat(),
+        &[&["--solver", "reference"][..], extra].concat(),
     );
     (carm, reference)
 }
@@ -285,6 +282,44 @@ fn carm_walks_a_many_voxel_octree_as_the_reference_solver() {
         assert_eq!(node["voxel_bytes"], carm["nodes"][0]["voxel_bytes"]);
     }
     assert_agree(&carm, &reference, "");
+}
+
+/// A shot's channels shoot from their own densities where they lie differently over the
+/// shooter (the Cornell box's coloured walls make them), or all from the channels' summed
+/// density (`--summed-density`): carm.occ makes the reference solver's shots either way (the
+/// same power left unshot, every object's mean to float rounding), and the two ways differ.
+#[test]
+fn carm_shoots_the_channels_as_the_reference_solver_does() {
+    let (split, split_ref) = carm_and_reference("carm-channels", &[]);
+    let summed = ["--summed-density"];
+    let (together, together_ref) = carm_and_reference("carm-channels-summed", &summed);
+    let left = |r: &serde_json::Value| r["totals"]["unshot_fraction"].as_f64().expect("a number");
+    for (carm, reference, what) in [
+        (&split, &split_ref, "apart"),
+        (&together, &together_ref, "summed"),
+    ] {
+        assert!(
+            (left(carm) - left(reference)).abs() <= 1e-6 * left(reference),
+            "{what}: carm left {} unshot, the reference {}",
+            left(carm),
+            left(reference)
+        );
+        for ((name, b), (_, r)) in means(carm).iter().zip(&means(reference)) {
+            assert!(
+                apart(b, r) <= 1e-6,
+                "{what} {name}: carm {b:?} against {r:?}"
+            );
+        }
+    }
+    let most = means(&split)
+        .iter()
+        .zip(&means(&together))
+        .map(|((_, a), (_, b))| apart(a, b))
+        .fold(0.0, f64::max);
+    assert!(
+        most > 1e-3,
+        "the channels apart and summed differ by {most} at most"
+    );
 }
 
 #[test]
@@ -641,10 +676,11 @@ fn carm_spreads_the_cornell_box_with_an_eighth_of_it_a_node() {
 /// node lends only when it has two batches' worth left, so the programs are run with batches of
 /// 32 receivers (`MAX.BATCH`; the table lamp's nodes have about a thousand each). With the lamp
 /// spread over 4 nodes (`--threads 1`: the same loans every run), both geometry protocols, with
-/// one task a node or two tasks and a thread, give the solution they give with `--no-poach`, to
-/// the bit, with receivers lent: the root, which keeps none of its own, computes some of its
-/// children's; every receiver lent is computed once, and the form factors are those of the run
-/// without poaching.
+/// one task a node or two tasks and a thread, and the Cornell box spread (its coloured walls
+/// make shots whose channels shoot apart, so loans repay each channel's form factors too), give
+/// the solution they give with `--no-poach`, to the bit, with receivers lent: the root, which
+/// keeps none of its own, computes some of its children's; every receiver lent is computed
+/// once, and the form factors are those of the run without poaching.
 #[test]
 fn carm_poaching_moves_receivers_and_not_the_solution() {
     let copy = programs_with("carm-poach-programs", "VAL INT MAX.BATCH IS", "1024", "32");
@@ -655,16 +691,24 @@ fn carm_poaching_moves_receivers_and_not_the_solution() {
         ["--node-memory", "2112", "--cache", "1056"],
         ["--node-memory", "4224", "--cache", "2112"],
     );
-    for (name, program, spread, walkers) in [
-        ("carm", &carm, carm_spread, &[][..]),
-        ("named", &named, named_spread, &[][..]),
-        ("named-walkers", &named, named_spread, &walkers[..]),
+    // the Cornell box in voxels of at most 8 triangles (16,752 bytes), an eighth a node
+    let cornell = [
+        SETTINGS,
+        &["--until", "unshot=0.05", "--voxel-triangles", "8"],
+    ]
+    .concat();
+    let cornell_spread = ["--node-memory", "2094", "--cache", "1047"];
+    for (name, program, scene, spread, walkers) in [
+        ("carm", &carm, &LAMP[..], &carm_spread[..], &[][..]),
+        ("named", &named, &LAMP, &named_spread, &[][..]),
+        ("named-walkers", &named, &LAMP, &named_spread, &walkers[..]),
+        ("carm-cornell", &carm, &cornell, &cornell_spread, &[][..]),
     ] {
         let program = program.to_str().expect("a UTF-8 path");
-        let mut flags = [&nodes[..], &spread, walkers, &["--program", program]].concat();
-        let poaching = solve(&scratch(&format!("carm-poach-{name}")), &LAMP, &flags);
+        let mut flags = [&nodes[..], spread, walkers, &["--program", program]].concat();
+        let poaching = solve(&scratch(&format!("carm-poach-{name}")), scene, &flags);
         flags.push("--no-poach");
-        let alone = solve(&scratch(&format!("carm-poach-{name}-not")), &LAMP, &flags);
+        let alone = solve(&scratch(&format!("carm-poach-{name}-not")), scene, &flags);
         assert_eq!(means(&poaching), means(&alone), "{name}");
         assert_eq!(poaching["totals"], alone["totals"], "{name}");
         let sum = |report: &serde_json::Value, key: &str| -> u64 {

@@ -117,7 +117,7 @@ fn forcing_every_stage_on_agrees_and_leaving_one_out_is_said() {
 
 /// carm.occ leaves out the shadow rays of the convex room as the reference solver does: it says
 /// so, casts none, and gives the answer it gives with them (`--all-stages`), and the reference
-/// solver's when it shoots as carm.occ does (`--summed-density`).
+/// solver's.
 #[test]
 fn carm_leaves_out_shadow_rays_where_the_reference_solver_does() {
     let carm = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
@@ -126,7 +126,7 @@ fn carm_leaves_out_shadow_rays_where_the_reference_solver_does() {
     let (full, _) = convex_room(&scratch("stages-carm-full"), &all);
     let (reference, _) = convex_room(
         &scratch("stages-carm-reference"),
-        &["--solver", "reference", "--summed-density"],
+        &["--solver", "reference"],
     );
     assert!(lean_err.contains("left out: shadow rays"), "{lean_err}");
     assert!(left_out(&lean).iter().any(|s| s.starts_with("shadow rays")));

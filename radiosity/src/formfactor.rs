@@ -175,11 +175,11 @@ pub struct DensitySet<const N: usize> {
 impl<const N: usize> DensitySet<N> {
     /// The set of `densities` (`None`: uniform); those given must share their grid, as
     /// [`SourceDensity::of_parts_sets`] makes them.
-    pub fn new(densities: [Option<&SourceDensity>; N]) -> DensitySet<N> {
+    pub fn new<C: AsRef<[f32]>>(densities: [Option<&SourceDensity<C>>; N]) -> DensitySet<N> {
         let g = densities.iter().flatten().map(|d| d.g).next().unwrap_or(1);
         debug_assert!(densities.iter().flatten().all(|d| d.g == g));
         let cells = (0..(g * g) as usize)
-            .map(|i| densities.map(|d| d.map_or(1.0, |d| d.cells[i])))
+            .map(|i| densities.map(|d| d.map_or(1.0, |d| d.cells.as_ref()[i])))
             .collect();
         DensitySet {
             g,

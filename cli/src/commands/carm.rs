@@ -122,6 +122,10 @@ pub struct CarmSettings {
     /// Task poaching: a node that runs out of receivers in a shot asks its neighbours for some
     /// of theirs (`--no-poach`: false).
     pub poach: bool,
+    /// Each channel of a shot from where its own unshot power lies when the channels lie
+    /// differently over the shooter, as the reference solver shoots (`--summed-density`:
+    /// false, every channel from the channels' summed density).
+    pub channel_grids: bool,
     /// The voxels spread over the nodes (`--node-memory`, `--cache`); `None`: every voxel on
     /// every node.
     pub memory: Option<Memory>,
@@ -465,7 +469,9 @@ fn capacities(
             "MAX.REPORT",
             (3 * mesh.patches.len().min(PART_PATCHES) + 3 * CANDIDATES * most_at_first)
                 .max(3 * most_in_one)
-                .max(if growth > 0 { 5 * points } else { 0 }),
+                .max(if growth > 0 { 5 * points } else { 0 })
+                // a refinement round's form factors, each channel's too (channels apart)
+                .max(if growth > 0 { 4 * MAX_PROBES } else { 0 }),
         ),
     ];
     if let Some(named) = &items.named {
@@ -493,6 +499,7 @@ fn capacities(
         .chain([
             ("THREADS", settings.worker_threads),
             ("LOAN", if settings.poach { LOAN } else { 0 }),
+            ("CHANNEL.GRIDS", usize::from(settings.channel_grids)),
         ])
         .collect())
 }

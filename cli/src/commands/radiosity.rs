@@ -109,9 +109,9 @@ pub struct Args {
     /// ask its neighbours for some of theirs).
     #[arg(long)]
     pub no_poach: bool,
-    /// Every channel of a shot from the channels' summed unshot power over the source, as
-    /// carm.occ shoots (by default the reference solver shoots each channel from where its own
-    /// power lies when they lie differently: radiosity/REFERENCES.md, "The dim faces' colours").
+    /// Every channel of a shot from the channels' summed unshot power over the source (by
+    /// default each channel shoots from where its own power lies when they lie differently:
+    /// radiosity/REFERENCES.md, "The dim faces' colours"); both solvers.
     #[arg(long)]
     pub summed_density: bool,
     /// Where carm.occ's nodes run: inproc (this process) or mpi (spread over the ranks of
@@ -376,6 +376,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
                 tasks: args.tasks,
                 worker_threads: args.worker_threads,
                 poach: !args.no_poach,
+                channel_grids: !args.summed_density,
                 memory: args
                     .node_memory
                     .zip(args.cache)
@@ -394,12 +395,6 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
             progress.done();
             if let Some(line) = carm_left_out(&args, &report).filter(|_| reports) {
                 eprintln!("note: left out: {line}");
-            }
-            if coloured(&solver) && !args.summed_density && reports {
-                eprintln!(
-                    "note: carm.occ shoots every channel from the channels' summed density; \
-                     --solver reference shoots each from where its own power lies"
-                );
             }
             Some(report)
         }
@@ -492,13 +487,6 @@ fn print_left_out(name: &str, scene: &Scene, mesh: &Mesh, diag: f32) {
             1e-5 * diag
         );
     }
-}
-
-/// Whether some object reflects the channels differently (where shooting each channel from
-/// its own density can differ from shooting their sum).
-fn coloured(solver: &Solver) -> bool {
-    let differ = |r: glam::Vec3| r.x != r.y || r.y != r.z;
-    solver.scene.objects.iter().any(|o| differ(o.reflectance))
 }
 
 /// Says in one line which stages the scene does not need and are left out (and how to force
@@ -737,8 +725,7 @@ fn solver_config(args: &Args, diag: f32, element_size: f32) -> SolverConfig {
             max_leaf: args.voxel_triangles as usize,
             ..OctreeConfig::default()
         },
-        // carm.occ shoots the summed density only (its report says so)
-        channel_densities: !args.summed_density && matches!(args.solver, SolverKind::Reference),
+        channel_densities: !args.summed_density,
         ..SolverConfig::default()
     }
 }

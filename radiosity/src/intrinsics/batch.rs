@@ -14,7 +14,8 @@ use super::{
     MAX_SAMPLES, RAY_FLOATS, SAMPLE_STREAM, array, array_mut, facing_receiver_rays, triangle,
 };
 use crate::formfactor::{
-    FormFactorConfig, SourceDensity, form_factor_weighted, receiver_samples, sample_grid,
+    DensitySet, FormFactorConfig, SampleWeights, SourceDensity, form_factor_sets,
+    form_factor_weighted, receiver_samples, receiver_samples_sets, sample_grid,
 };
 use crate::geom::Tri;
 use crate::octree::flat::{CURSOR_INTS, START};
@@ -49,8 +50,53 @@ struct Shot<'a> {
     /// The source's normal (`tri.normal()`, once for every receiver).
     normal: Vec3,
     config: FormFactorConfig,
-    density: Option<SourceDensity<&'a [f32]>>,
+    density: Densities<'a>,
     seed: u64,
+}
+
+/// How `RAD.RECEIVERS.RAYS` weighs a shot's samples: by one density (none: uniform), or by the
+/// four of a shot whose channels shoot apart (the channels summed, then each channel's).
+enum Densities<'a> {
+    One(Option<SourceDensity<&'a [f32]>>),
+    Sets(DensitySet<4>),
+}
+
+/// A density as a grid set gives it, its cell count first (`grid` of `RAD.RECEIVERS.RAYS` when
+/// the channels shoot apart: four of them, [`GRID_SET`] floats each).
+const GRID_SET: usize = 577;
+
+impl<'a> Densities<'a> {
+    /// The densities `grid` holds (empty: uniform; a density's cells; four grid sets), or
+    /// `None` when it is none of those.
+    fn of(grid: &'a [f32]) -> Option<Densities<'a>> {
+        if grid.is_empty() {
+            return Some(Densities::One(None));
+        }
+        if grid.len() != 4 * GRID_SET {
+            return SourceDensity::from_cells(grid).map(|d| Densities::One(Some(d)));
+        }
+        let mut sets = [None, None, None, None];
+        for (j, set) in sets.iter_mut().enumerate() {
+            let at = j * GRID_SET;
+            let cells = grid[at];
+            if cells == 0.0 {
+                continue;
+            }
+            let n = (cells >= 1.0 && cells < GRID_SET as f32).then_some(cells as usize)?;
+            *set = Some(SourceDensity::from_cells(&grid[at + 1..at + 1 + n])?);
+        }
+        let grids = sets
+            .iter()
+            .flatten()
+            .map(|d| d.cells().len())
+            .collect::<Vec<_>>();
+        if grids.windows(2).any(|w| w[0] != w[1]) {
+            return None;
+        }
+        Some(Densities::Sets(DensitySet::new(
+            sets.each_ref().map(Option::as_ref),
+        )))
+    }
 }
 
 /// `PROC RAD.RECEIVERS.RAYS (VAL []REAL32 points, VAL []INT global, VAL []REAL32 tri,
@@ -125,26 +171,28 @@ pub unsafe extern "C" fn receivers_rays(
             },
         )
     };
-    let density = SourceDensity::from_cells(grid);
+    let density = Densities::of(grid);
     let valid = (1..=MAX_SAMPLES).contains(&rays)
         && (0..=rays).contains(&far)
         && offset.is_finite()
         && offset >= 0.0
         && points.len() == RECEIVER_FLOATS * global.len()
-        && global.iter().all(|&g| g >= 0)
-        && (grid.is_empty() || density.is_some());
-    let shot = tri.filter(|_| valid).map(|tri| Shot {
-        tri,
-        normal: tri.normal(),
-        config: FormFactorConfig {
-            rays: rays as u32,
-            far_rays: far as u32,
-            offset,
-            ..FormFactorConfig::default()
-        },
-        density,
-        seed: seed as u64,
-    });
+        && global.iter().all(|&g| g >= 0);
+    let shot = tri
+        .zip(density)
+        .filter(|_| valid)
+        .map(|(tri, density)| Shot {
+            tri,
+            normal: tri.normal(),
+            config: FormFactorConfig {
+                rays: rays as u32,
+                far_rays: far as u32,
+                offset,
+                ..FormFactorConfig::default()
+            },
+            density,
+            seed: seed as u64,
+        });
     let (done, rays_cast) = match shot {
         Some(shot) => fill_rays(&shot, points, global, &mut out),
         None => (-1, 0),
@@ -159,15 +207,20 @@ pub unsafe extern "C" fn receivers_rays(
 /// Draws the receivers' samples and rays into `out` while they fit; answers the receivers
 /// taken (-1 when not even the first fits) and the rays cast.
 fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> (Word, Word) {
-    let (mut samples, mut weights) = (Vec::new(), Vec::new());
-    let weighted = shot.density.is_some();
+    let (mut samples, mut weights, mut sets) = (Vec::new(), Vec::new(), Vec::new());
+    let weighted = !matches!(shot.density, Densities::One(None));
+    // the weights' planes: one, or one a density of a set
+    let plane = match shot.density {
+        Densities::Sets(_) => out.weights.len() / 4,
+        Densities::One(_) => out.weights.len(),
+    };
     let skip = 2 * u64::from(sample_grid(shot.config.rays)).pow(2);
     let strides = SetStrides::new(&Pcg32::new(0, SAMPLE_STREAM), skip);
     let (mut at, mut cast, mut taken) = (0usize, 0, 0);
     let room = |at: usize, m: usize, out: &RaysOut| {
         let end = at + m;
         3 * end <= out.samples.len()
-            && (!weighted || end <= out.weights.len())
+            && (!weighted || end <= plane)
             && RAY_FLOATS * end <= out.rays.len()
             && end <= out.blocked.len()
             && CURSOR_INTS * end <= out.cursor.len()
@@ -180,16 +233,25 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
         let (seed, set) = receiver_seed(shot.seed, g as usize);
         let mut rng = Pcg32::new(seed, SAMPLE_STREAM);
         rng.leap(strides.of(set));
-        let density = shot.density.as_ref();
-        receiver_samples(
-            (p, n),
-            &shot.tri,
-            &shot.config,
-            density,
-            &mut rng,
-            &mut samples,
-            &mut weights,
-        );
+        match &shot.density {
+            Densities::One(density) => {
+                let density = density.as_ref();
+                let (tri, config) = (&shot.tri, &shot.config);
+                receiver_samples(
+                    (p, n),
+                    tri,
+                    config,
+                    density,
+                    &mut rng,
+                    &mut samples,
+                    &mut weights,
+                );
+            }
+            Densities::Sets(set) => {
+                let (tri, config) = (&shot.tri, &shot.config);
+                receiver_samples_sets((p, n), tri, config, set, &mut rng, &mut samples, &mut sets);
+            }
+        }
         let m = samples.len();
         if !room(at, m, out) {
             break;
@@ -198,8 +260,16 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
         for (k, s) in samples.iter().take(m).enumerate() {
             out.samples[3 * (at + k)..3 * (at + k + 1)].copy_from_slice(&s.to_array());
         }
-        if weighted {
-            out.weights[at..at + m].copy_from_slice(&weights[..m]);
+        match shot.density {
+            Densities::One(Some(_)) => out.weights[at..at + m].copy_from_slice(&weights[..m]),
+            Densities::Sets(_) => {
+                for (k, w) in sets.iter().take(m).enumerate() {
+                    for (j, w) in w.iter().enumerate() {
+                        out.weights[j * plane + at + k] = *w;
+                    }
+                }
+            }
+            Densities::One(None) => {}
         }
         if m > 0 {
             // (samples were drawn, so the receiver faces the source)
@@ -311,6 +381,125 @@ pub unsafe extern "C" fn receivers_form_factors(
     unsafe { *count = written };
 }
 
+/// `PROC RAD.RECEIVERS.FORM.FACTORS.SETS (VAL []REAL32 points, VAL []REAL32 tri, VAL []INT
+/// first, VAL []REAL32 samples, weights, VAL []INT weighted, VAL []BOOL blocked, []REAL32 f,
+/// RESULT INT count)`: `RAD.RECEIVERS.FORM.FACTORS` for the four densities of a shot whose
+/// channels shoot apart at once (the channels summed, then each channel's), from one pass over
+/// the samples and rays: `weights` holds four planes of `SIZE weights / 4` (the planes
+/// `RAD.RECEIVERS.RAYS` writes from a grid set), `weighted[j]` is 1 where plane `j` holds
+/// density `j`'s weights and 0 where that density is uniform; receiver `i`'s four form factors
+/// go to `f[4i .. 4i + 3]`, each exactly what `RAD.RECEIVERS.FORM.FACTORS` gives with that
+/// density's weights. `count` is the receivers done, or -1 on a wrong length.
+///
+/// # Safety
+/// As `RAD.RECEIVERS.FORM.FACTORS`.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn receivers_form_factors_sets(
+    points: *const f32,
+    points_len: Word,
+    tri: *const f32,
+    tri_len: Word,
+    first: *const i32,
+    first_len: Word,
+    samples: *const f32,
+    samples_len: Word,
+    weights: *const f32,
+    weights_len: Word,
+    weighted: *const i32,
+    weighted_len: Word,
+    blocked: *const u8,
+    blocked_len: Word,
+    f: *mut f32,
+    f_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (points, tri, first, samples, weights, weighted, blocked, f) = unsafe {
+        (
+            array(points, points_len),
+            triangle(array(tri, tri_len)),
+            array(first, first_len),
+            array(samples, samples_len),
+            array(weights, weights_len),
+            array(weighted, weighted_len),
+            array(blocked, blocked_len),
+            array_mut(f, f_len),
+        )
+    };
+    let r = first.len().saturating_sub(1);
+    let end = first.last().map_or(0, |&e| e.max(0) as usize);
+    let plane = weights.len() / 4;
+    let valid = !first.is_empty()
+        && first[0] == 0
+        && first.windows(2).all(|w| w[0] <= w[1])
+        && points.len() == RECEIVER_FLOATS * r
+        && 3 * end <= samples.len()
+        && weighted.len() == 4
+        && (weighted.iter().all(|&w| w == 0) || end <= plane)
+        && end <= blocked.len()
+        && 4 * r <= f.len();
+    let written = match tri.filter(|_| valid) {
+        Some(tri) => {
+            let config = FormFactorConfig::default();
+            let uniform = [0, 1, 2, 3].map(|j| weighted[j] == 0);
+            let each = points.chunks_exact(RECEIVER_FLOATS).zip(first.windows(2));
+            let mut s = Vec::new();
+            for ((floats, span), o) in each.zip(f.chunks_exact_mut(4)) {
+                let (a, b) = (span[0] as usize, span[1] as usize);
+                if a == b {
+                    o.fill(0.0);
+                    continue;
+                }
+                let (p, n) = receiver(floats);
+                s.clear();
+                s.extend(samples[3 * a..3 * b].chunks_exact(3).map(Vec3::from_slice));
+                let planes = Planes {
+                    weights,
+                    plane,
+                    from: a,
+                    uniform,
+                };
+                let seen = &blocked[a..b];
+                let (_, values) =
+                    form_factor_sets(p, n, &tri, &s, planes, &config, |k, _, _, _| seen[k] != 0);
+                o.copy_from_slice(&values);
+            }
+            r as Word
+        }
+        None => -1,
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
+/// Four densities' weights of one receiver's samples, in the planes of
+/// `RAD.RECEIVERS.FORM.FACTORS.SETS` (sample `k` of the receiver is sample `from + k` of the
+/// planes).
+struct Planes<'a> {
+    weights: &'a [f32],
+    plane: usize,
+    from: usize,
+    uniform: [bool; 4],
+}
+
+impl SampleWeights<4> for Planes<'_> {
+    fn uniform(&self, j: usize) -> bool {
+        self.uniform[j]
+    }
+    fn at(&self, k: usize) -> [f32; 4] {
+        [0, 1, 2, 3].map(|j| {
+            if self.uniform[j] {
+                1.0
+            } else {
+                self.weights[j * self.plane + self.from + k]
+            }
+        })
+    }
+}
+
 /// `PROC RAD.POINTS.RECEIVE (VAL []REAL32 factor, db, []REAL32 irradiance, RESULT INT count)`:
 /// books a shot of `db` (RGB radiosity) at n sample points: point i's irradiance (3 REAL32s)
 /// gains `db · factor[i]`, channel by channel, in REAL32 as the Rust solver adds it. `count` is
@@ -399,48 +588,141 @@ pub unsafe extern "C" fn corners_receive(
             array_mut(unshot, unshot_len),
         )
     };
+    let corners = Corners {
+        point,
+        patch,
+        weight,
+        rho,
+    };
+    let valid = indices_below(point, factor.len());
+    let written = book_corners(&corners, valid, db, received, unshot, |p, _| factor[p]);
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
+/// `PROC RAD.CORNERS.RECEIVE.SETS`, `RAD.CORNERS.RECEIVE`'s arguments: the same booking when a
+/// shot's channels shoot apart, `factor` holding each point's three channels' form factors
+/// (`factor[3p + j]`); each channel as `RAD.CORNERS.RECEIVE` with that channel's factors and
+/// `db` zero in the others books it, to the bit.
+///
+/// # Safety
+/// As `RAD.CORNERS.RECEIVE`.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn corners_receive_sets(
+    point: *const i32,
+    point_len: Word,
+    patch: *const i32,
+    patch_len: Word,
+    weight: *const f64,
+    weight_len: Word,
+    factor: *const f32,
+    factor_len: Word,
+    db: *const f32,
+    db_len: Word,
+    rho: *const f32,
+    rho_len: Word,
+    received: *mut f64,
+    received_len: Word,
+    unshot: *mut f64,
+    unshot_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays; occam's usage rules keep the written ones apart.
+    let (point, patch, weight, factor, db, rho, received, unshot) = unsafe {
+        (
+            array(point, point_len),
+            array(patch, patch_len),
+            array(weight, weight_len),
+            array(factor, factor_len),
+            array(db, db_len),
+            array(rho, rho_len),
+            array_mut(received, received_len),
+            array_mut(unshot, unshot_len),
+        )
+    };
+    let corners = Corners {
+        point,
+        patch,
+        weight,
+        rho,
+    };
+    let valid = indices_below(point, factor.len() / 3);
+    let written = book_corners(&corners, valid, db, received, unshot, |p, j| {
+        factor[3 * p + j]
+    });
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
+/// A node's element corners as `RAD.CORNERS.RECEIVE` is passed them.
+struct Corners<'a> {
+    point: &'a [i32],
+    patch: &'a [i32],
+    weight: &'a [f64],
+    rho: &'a [f32],
+}
+
+/// Books a shot at `corners` (`valid`: the factors cover their points), channel `j` of point
+/// `p` receiving `factor(p, j)`; answers the corners booked, or -1 on a wrong length.
+fn book_corners(
+    corners: &Corners,
+    valid: bool,
+    db: &[f32],
+    received: &mut [f64],
+    unshot: &mut [f64],
+    factor: impl Fn(usize, usize) -> f32,
+) -> Word {
+    let Corners {
+        point,
+        patch,
+        weight,
+        rho,
+    } = *corners;
     let n = point.len();
     let patches = rho.len() / 3;
-    let valid = patch.len() == n
+    let valid = valid
+        && patch.len() == n
         && weight.len() == n
         && unshot.len() == 3 * n
         && db.len() == 3
         && rho.len() == 3 * patches
         && received.len() == rho.len()
-        && indices_below(point, factor.len())
         && indices_below(patch, patches);
-    let written = if valid {
-        let db = [db[0], db[1], db[2]].map(f64::from);
-        // A node's corners come patch by patch (but for those adaptive subdivision added), so
-        // a run of corners of one patch adds to its sums in registers instead of in memory: the
-        // same additions in the same order.
-        let mut start = 0;
-        for run in patch.chunk_by(|a, b| a == b) {
-            let at = 3 * run[0] as usize;
-            let mut sums = [received[at], received[at + 1], received[at + 2]];
-            let rho = [rho[at], rho[at + 1], rho[at + 2]].map(f64::from);
-            for c in start..start + run.len() {
-                let f = factor[point[c] as usize];
-                // A corner of weight 0 only keeps power for its element (adaptive subdivision).
-                if f == 0.0 || weight[c] == 0.0 {
+    if !valid {
+        return -1;
+    }
+    let db = [db[0], db[1], db[2]].map(f64::from);
+    // A node's corners come patch by patch (but for those adaptive subdivision added), so a
+    // run of corners of one patch adds to its sums in registers instead of in memory: the same
+    // additions in the same order.
+    let mut start = 0;
+    for run in patch.chunk_by(|a, b| a == b) {
+        let at = 3 * run[0] as usize;
+        let mut sums = [received[at], received[at + 1], received[at + 2]];
+        let rho = [rho[at], rho[at + 1], rho[at + 2]].map(f64::from);
+        for c in start..start + run.len() {
+            let p = point[c] as usize;
+            // A corner of weight 0 only keeps power for its element (adaptive subdivision).
+            if weight[c] == 0.0 {
+                continue;
+            }
+            for j in 0..3 {
+                let f = factor(p, j);
+                if f == 0.0 {
                     continue;
                 }
-                let w = f64::from(f) * weight[c];
-                for j in 0..3 {
-                    let power = db[j] * w;
-                    sums[j] += power;
-                    unshot[3 * c + j] += power * rho[j];
-                }
+                let power = db[j] * (f64::from(f) * weight[c]);
+                sums[j] += power;
+                unshot[3 * c + j] += power * rho[j];
             }
-            received[at..at + 3].copy_from_slice(&sums);
-            start += run.len();
         }
-        n as Word
-    } else {
-        -1
-    };
-    // SAFETY: the ABI passes a valid result address.
-    unsafe { *count = written };
+        received[at..at + 3].copy_from_slice(&sums);
+        start += run.len();
+    }
+    n as Word
 }
 
 /// `PROC RAD.PATCHES.TAKE (VAL []INT patches, []REAL64 received, []INT got, []REAL64 packed,
@@ -1094,5 +1376,171 @@ mod test {
             -1
         );
         assert_eq!(received, before);
+    }
+
+    /// A grid of 576 cells: a density varying with `phase` (mean about 1).
+    fn varying(phase: f32) -> Vec<f32> {
+        (0..576)
+            .map(|i| 1.0 + 0.5 * (i as f32 * 0.1 + phase).sin())
+            .collect()
+    }
+
+    #[test]
+    fn channel_sets_weigh_and_book_as_the_one_density_calls_do() {
+        let tri = [0.0f32, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0];
+        let points: Vec<f32> = (0..3)
+            .flat_map(|i| {
+                let x = 0.2 + 0.3 * i as f32;
+                [x, 0.0, 0.3, 0.0, 1.0, 0.0, x, 0.0, 0.3]
+            })
+            .collect();
+        let global = [5i32, 17, 300];
+        // the summed density and channels 0 and 2 vary, channel 1 is uniform
+        let grids = [
+            Some(varying(0.0)),
+            Some(varying(1.0)),
+            None,
+            Some(varying(2.0)),
+        ];
+        let mut set = Vec::new();
+        for g in &grids {
+            set.push(if g.is_some() { 576.0 } else { 0.0 });
+            set.extend(g.clone().unwrap_or_else(|| vec![0.0; 576]));
+        }
+        let n = 3 * 64;
+        let call = |grid: &[f32], planes: usize| {
+            let mut out = Scratch::new(3, n);
+            out.weights = vec![0.0; planes * n];
+            let got = rays_call(&points, &global, &tri, (16, 16, 77), grid, &mut out);
+            assert_eq!(got.0, 3);
+            out
+        };
+        let sets = call(&set, 4);
+        let end = sets.first[3] as usize;
+        // the same samples and rays; each plane the weights its density alone gives
+        for (j, g) in grids.iter().enumerate() {
+            let one = call(g.as_deref().unwrap_or(&[]), 1);
+            assert_eq!(one.first, sets.first);
+            assert_eq!(one.samples, sets.samples);
+            assert_eq!(one.rays, sets.rays);
+            if g.is_some() {
+                assert_eq!(one.weights[..end], sets.weights[j * n..j * n + end]);
+            }
+        }
+        // four form factors a receiver in one pass, each the one-density call's to the bit
+        let blocked: Vec<u8> = (0..n).map(|k| u8::from(k % 5 == 0)).collect();
+        let weighted = grids.each_ref().map(|g| i32::from(g.is_some()));
+        let mut f4 = vec![0.0f32; 12];
+        let mut count = 0;
+        // SAFETY: valid slices and result.
+        unsafe {
+            receivers_form_factors_sets(
+                points.as_ptr(),
+                points.len() as Word,
+                tri.as_ptr(),
+                9,
+                sets.first.as_ptr(),
+                4,
+                sets.samples.as_ptr(),
+                sets.samples.len() as Word,
+                sets.weights.as_ptr(),
+                sets.weights.len() as Word,
+                weighted.as_ptr(),
+                4,
+                blocked.as_ptr(),
+                blocked.len() as Word,
+                f4.as_mut_ptr(),
+                12,
+                &mut count,
+            )
+        };
+        assert_eq!(count, 3);
+        for (j, g) in grids.iter().enumerate() {
+            let w: &[f32] = if g.is_some() {
+                &sets.weights[j * n..j * n + end]
+            } else {
+                &[]
+            };
+            let mut f = [0.0f32; 3];
+            // SAFETY: valid slices and result.
+            unsafe {
+                receivers_form_factors(
+                    points.as_ptr(),
+                    points.len() as Word,
+                    tri.as_ptr(),
+                    9,
+                    sets.first.as_ptr(),
+                    4,
+                    sets.samples.as_ptr(),
+                    sets.samples.len() as Word,
+                    w.as_ptr(),
+                    w.len() as Word,
+                    blocked.as_ptr(),
+                    blocked.len() as Word,
+                    f.as_mut_ptr(),
+                    3,
+                    &mut count,
+                )
+            };
+            assert_eq!(count, 3);
+            for i in 0..3 {
+                assert_eq!(
+                    f4[4 * i + j].to_bits(),
+                    f[i].to_bits(),
+                    "density {j} receiver {i}"
+                );
+            }
+            assert!(f.iter().any(|&x| x > 0.0));
+        }
+        // booking each channel's factors at once is booking them one channel at a time
+        let (point, patch, weight) = ([0i32, 1, 2, 1], [0i32, 0, 1, 1], [0.5f64, 1.5, 2.0, 0.0]);
+        let factor: Vec<f32> = (0..3)
+            .flat_map(|i| [f4[4 * i + 1], f4[4 * i + 2], f4[4 * i + 3]])
+            .collect();
+        let (db, rho) = ([2.0f32, 3.0, 5.0], [0.3f32, 0.5, 0.7, 0.2, 0.4, 0.6]);
+        let book =
+            |sets: bool, factor: &[f32], db: &[f32], received: &mut [f64], unshot: &mut [f64]| {
+                let entry = if sets {
+                    corners_receive_sets
+                } else {
+                    corners_receive
+                };
+                let mut count = 0;
+                // SAFETY: valid slices and result.
+                unsafe {
+                    entry(
+                        point.as_ptr(),
+                        4,
+                        patch.as_ptr(),
+                        4,
+                        weight.as_ptr(),
+                        4,
+                        factor.as_ptr(),
+                        factor.len() as Word,
+                        db.as_ptr(),
+                        3,
+                        rho.as_ptr(),
+                        6,
+                        received.as_mut_ptr(),
+                        6,
+                        unshot.as_mut_ptr(),
+                        12,
+                        &mut count,
+                    )
+                };
+                assert_eq!(count, 4);
+            };
+        let (mut received, mut unshot) = (vec![0.25f64; 6], vec![0.5f64; 12]);
+        book(true, &factor, &db, &mut received, &mut unshot);
+        let (mut r1, mut u1) = (vec![0.25f64; 6], vec![0.5f64; 12]);
+        for c in 0..3 {
+            let mut masked = [0.0f32; 3];
+            masked[c] = db[c];
+            let one: Vec<f32> = (0..3).map(|i| factor[3 * i + c]).collect();
+            book(false, &one, &masked, &mut r1, &mut u1);
+        }
+        assert_eq!(received, r1);
+        assert_eq!(unshot, u1);
+        assert!(received.iter().any(|&x| x != 0.25));
     }
 }

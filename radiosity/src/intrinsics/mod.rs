@@ -206,6 +206,15 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: batch::receivers_form_factors as *const u8,
     },
     Intrinsic {
+        name: "RAD.RECEIVERS.FORM.FACTORS.SETS",
+        params: &[
+            ValReal32s, ValReal32s, ValInts, ValReal32s, ValReal32s, ValInts, ValBools, VarReal32s,
+            ResultInt,
+        ],
+        result: None,
+        addr: batch::receivers_form_factors_sets as *const u8,
+    },
+    Intrinsic {
         name: "RAD.POINTS.RECEIVE",
         params: &[ValReal32s, ValReal32s, VarReal32s, ResultInt],
         result: None,
@@ -219,6 +228,15 @@ pub static INTRINSICS: &[Intrinsic] = &[
         ],
         result: None,
         addr: batch::corners_receive as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.CORNERS.RECEIVE.SETS",
+        params: &[
+            ValInts, ValInts, ValReal64s, ValReal32s, ValReal32s, ValReal32s, VarReal64s,
+            VarReal64s, ResultInt,
+        ],
+        result: None,
+        addr: batch::corners_receive_sets as *const u8,
     },
     Intrinsic {
         name: "RAD.PATCHES.TAKE",
