@@ -575,29 +575,15 @@ pub unsafe extern "C" fn corners_receive(
     unshot_len: Word,
     count: *mut Word,
 ) {
-    // SAFETY: the ABI passes valid arrays; occam's usage rules keep the written ones apart.
-    let (point, patch, weight, factor, db, rho, received, unshot) = unsafe {
-        (
-            array(point, point_len),
-            array(patch, patch_len),
-            array(weight, weight_len),
-            array(factor, factor_len),
-            array(db, db_len),
-            array(rho, rho_len),
-            array_mut(received, received_len),
-            array_mut(unshot, unshot_len),
+    // SAFETY: the caller's (the ABI's) arrays.
+    unsafe {
+        corners_receive_by(
+            1,
+            (point, point_len, patch, patch_len, weight, weight_len),
+            (factor, factor_len, db, db_len, rho, rho_len),
+            (received, received_len, unshot, unshot_len, count),
         )
-    };
-    let corners = Corners {
-        point,
-        patch,
-        weight,
-        rho,
-    };
-    let valid = indices_below(point, factor.len());
-    let written = book_corners(&corners, valid, db, received, unshot, |p, _| factor[p]);
-    // SAFETY: the ABI passes a valid result address.
-    unsafe { *count = written };
+    }
 }
 
 /// `PROC RAD.CORNERS.RECEIVE.SETS`, `RAD.CORNERS.RECEIVE`'s arguments: the same booking when a
@@ -630,6 +616,52 @@ pub unsafe extern "C" fn corners_receive_sets(
     unshot_len: Word,
     count: *mut Word,
 ) {
+    // SAFETY: the caller's (the ABI's) arrays.
+    unsafe {
+        corners_receive_by(
+            3,
+            (point, point_len, patch, patch_len, weight, weight_len),
+            (factor, factor_len, db, db_len, rho, rho_len),
+            (received, received_len, unshot, unshot_len, count),
+        )
+    }
+}
+
+/// `RAD.CORNERS.RECEIVE` (`channels` 1: a form factor a point) and `.SETS` (3: each channel's):
+/// the ABI's arrays unpacked and the corners booked.
+///
+/// # Safety
+/// As `RAD.CORNERS.RECEIVE`.
+#[allow(
+    clippy::type_complexity,
+    reason = "the occam ABI: address and length per array, grouped"
+)]
+unsafe fn corners_receive_by(
+    channels: usize,
+    (point, point_len, patch, patch_len, weight, weight_len): (
+        *const i32,
+        Word,
+        *const i32,
+        Word,
+        *const f64,
+        Word,
+    ),
+    (factor, factor_len, db, db_len, rho, rho_len): (
+        *const f32,
+        Word,
+        *const f32,
+        Word,
+        *const f32,
+        Word,
+    ),
+    (received, received_len, unshot, unshot_len, count): (
+        *mut f64,
+        Word,
+        *mut f64,
+        Word,
+        *mut Word,
+    ),
+) {
     // SAFETY: the ABI passes valid arrays; occam's usage rules keep the written ones apart.
     let (point, patch, weight, factor, db, rho, received, unshot) = unsafe {
         (
@@ -649,10 +681,14 @@ pub unsafe extern "C" fn corners_receive_sets(
         weight,
         rho,
     };
-    let valid = indices_below(point, factor.len() / 3);
-    let written = book_corners(&corners, valid, db, received, unshot, |p, j| {
-        factor[3 * p + j]
-    });
+    let valid = indices_below(point, factor.len() / channels);
+    let written = if channels == 1 {
+        book_corners(&corners, valid, db, received, unshot, |p, _| factor[p])
+    } else {
+        book_corners(&corners, valid, db, received, unshot, |p, j| {
+            factor[3 * p + j]
+        })
+    };
     // SAFETY: the ABI passes a valid result address.
     unsafe { *count = written };
 }
