@@ -20,7 +20,7 @@ use crate::formfactor::{
 use crate::geom::Tri;
 use crate::octree::flat::{CURSOR_INTS, START};
 use crate::rng::{Pcg32, SetStrides};
-use crate::solver::receiver_seed;
+use crate::solver::{DENSITY_GRID, receiver_seed};
 
 /// Floats per receiver in the `points` array: position, normal, evaluation point (the layout
 /// of a node's sample points in carm.occ).
@@ -63,7 +63,7 @@ enum Densities<'a> {
 
 /// A density as a grid set gives it, its cell count first (`grid` of `RAD.RECEIVERS.RAYS` when
 /// the channels shoot apart: four of them, [`GRID_SET`] floats each).
-const GRID_SET: usize = 577;
+const GRID_SET: usize = (DENSITY_GRID * DENSITY_GRID) as usize + 1;
 
 impl<'a> Densities<'a> {
     /// The densities `grid` holds (empty: uniform; a density's cells; four grid sets), or
@@ -340,43 +340,24 @@ pub unsafe extern "C" fn receivers_form_factors(
             array_mut(f, f_len),
         )
     };
-    let r = first.len().saturating_sub(1);
     let end = first.last().map_or(0, |&e| e.max(0) as usize);
-    let valid = !first.is_empty()
-        && first[0] == 0
-        && first.windows(2).all(|w| w[0] <= w[1])
-        && points.len() == RECEIVER_FLOATS * r
-        && 3 * end <= samples.len()
-        && (weights.is_empty() || end <= weights.len())
-        && end <= blocked.len()
-        && r <= f.len();
-    let written = match tri.filter(|_| valid) {
-        Some(tri) => {
-            let config = FormFactorConfig::default();
-            let each = points.chunks_exact(RECEIVER_FLOATS).zip(first.windows(2));
-            let mut s = Vec::new();
-            for ((floats, span), o) in each.zip(f.iter_mut()) {
-                let (a, b) = (span[0] as usize, span[1] as usize);
-                *o = if a == b {
-                    0.0
-                } else {
-                    let (p, n) = receiver(floats);
-                    s.clear();
-                    s.extend(samples[3 * a..3 * b].chunks_exact(3).map(Vec3::from_slice));
-                    let w = if weights.is_empty() {
-                        &[][..]
-                    } else {
-                        &weights[a..b]
-                    };
-                    let seen = &blocked[a..b];
-                    form_factor_weighted(p, n, &tri, &s, w, &config, |k, _, _, _| seen[k] != 0)
-                        .value
-                };
-            }
-            r as Word
-        }
-        None => -1,
+    let valid = (weights.is_empty() || end <= weights.len()) && end <= blocked.len();
+    let batch = Taken {
+        points,
+        first,
+        samples,
+        valid,
     };
+    let written = batch.each(tri, f, 1, |p, n, tri, s, span, o| {
+        let w = if weights.is_empty() {
+            &[][..]
+        } else {
+            &weights[span.clone()]
+        };
+        let seen = &blocked[span];
+        let config = FormFactorConfig::default();
+        o[0] = form_factor_weighted(p, n, tri, s, w, &config, |k, _, _, _| seen[k] != 0).value;
+    });
     // SAFETY: the ABI passes a valid result address.
     unsafe { *count = written };
 }
@@ -429,50 +410,89 @@ pub unsafe extern "C" fn receivers_form_factors_sets(
             array_mut(f, f_len),
         )
     };
-    let r = first.len().saturating_sub(1);
     let end = first.last().map_or(0, |&e| e.max(0) as usize);
     let plane = weights.len() / 4;
-    let valid = !first.is_empty()
-        && first[0] == 0
-        && first.windows(2).all(|w| w[0] <= w[1])
-        && points.len() == RECEIVER_FLOATS * r
-        && 3 * end <= samples.len()
-        && weighted.len() == 4
+    let valid = weighted.len() == 4
         && (weighted.iter().all(|&w| w == 0) || end <= plane)
-        && end <= blocked.len()
-        && 4 * r <= f.len();
-    let written = match tri.filter(|_| valid) {
-        Some(tri) => {
-            let config = FormFactorConfig::default();
-            let uniform = [0, 1, 2, 3].map(|j| weighted[j] == 0);
-            let each = points.chunks_exact(RECEIVER_FLOATS).zip(first.windows(2));
-            let mut s = Vec::new();
-            for ((floats, span), o) in each.zip(f.chunks_exact_mut(4)) {
-                let (a, b) = (span[0] as usize, span[1] as usize);
-                if a == b {
-                    o.fill(0.0);
-                    continue;
-                }
-                let (p, n) = receiver(floats);
-                s.clear();
-                s.extend(samples[3 * a..3 * b].chunks_exact(3).map(Vec3::from_slice));
-                let planes = Planes {
-                    weights,
-                    plane,
-                    from: a,
-                    uniform,
-                };
-                let seen = &blocked[a..b];
-                let (_, values) =
-                    form_factor_sets(p, n, &tri, &s, planes, &config, |k, _, _, _| seen[k] != 0);
-                o.copy_from_slice(&values);
-            }
-            r as Word
-        }
-        None => -1,
+        && end <= blocked.len();
+    let uniform = [0, 1, 2, 3].map(|j| weighted.get(j) == Some(&0));
+    let batch = Taken {
+        points,
+        first,
+        samples,
+        valid,
     };
+    let written = batch.each(tri, f, 4, |p, n, tri, s, span, o| {
+        let from = span.start;
+        let planes = Planes {
+            weights,
+            plane,
+            from,
+            uniform,
+        };
+        let seen = &blocked[span];
+        let config = FormFactorConfig::default();
+        let (_, values) =
+            form_factor_sets(p, n, tri, s, planes, &config, |k, _, _, _| seen[k] != 0);
+        o.copy_from_slice(&values);
+    });
     // SAFETY: the ABI passes a valid result address.
     unsafe { *count = written };
+}
+
+/// The receivers `RAD.RECEIVERS.RAYS` took, as the form-factor entries are passed them.
+struct Taken<'a> {
+    points: &'a [f32],
+    first: &'a [i32],
+    samples: &'a [f32],
+    /// The entry's own arguments agree with `first`.
+    valid: bool,
+}
+
+impl Taken<'_> {
+    /// Calls `weigh(p, n, tri, samples, span, out)` for each receiver with samples (`span`:
+    /// their indices), `out` its `per` values of `f` (zeros for a receiver without samples);
+    /// answers the receivers done, or -1 when the arrays do not agree.
+    fn each(
+        &self,
+        tri: Option<Tri>,
+        f: &mut [f32],
+        per: usize,
+        mut weigh: impl FnMut(Vec3, Vec3, &Tri, &[Vec3], std::ops::Range<usize>, &mut [f32]),
+    ) -> Word {
+        let Taken {
+            points,
+            first,
+            samples,
+            valid,
+        } = *self;
+        let r = first.len().saturating_sub(1);
+        let end = first.last().map_or(0, |&e| e.max(0) as usize);
+        let valid = valid
+            && !first.is_empty()
+            && first[0] == 0
+            && first.windows(2).all(|w| w[0] <= w[1])
+            && points.len() == RECEIVER_FLOATS * r
+            && 3 * end <= samples.len()
+            && per * r <= f.len();
+        let Some(tri) = tri.filter(|_| valid) else {
+            return -1;
+        };
+        let each = points.chunks_exact(RECEIVER_FLOATS).zip(first.windows(2));
+        let mut s = Vec::new();
+        for ((floats, span), o) in each.zip(f.chunks_exact_mut(per)) {
+            let (a, b) = (span[0] as usize, span[1] as usize);
+            if a == b {
+                o.fill(0.0);
+                continue;
+            }
+            let (p, n) = receiver(floats);
+            s.clear();
+            s.extend(samples[3 * a..3 * b].chunks_exact(3).map(Vec3::from_slice));
+            weigh(p, n, &tri, &s, a..b, o);
+        }
+        r as Word
+    }
 }
 
 /// Four densities' weights of one receiver's samples, in the planes of
