@@ -10,7 +10,7 @@ use std::sync::OnceLock;
 mod boxes;
 use boxes::{BOXES_SETTINGS, boxes_scene};
 mod common;
-use common::{CORNELL_COARSE, LAMP, apart, means, scratch, solve};
+use common::{CORNELL_COARSE, LAMP, REFERENCE_AS_CARM, apart, means, scratch, solve};
 
 /// The same settings for both solvers (`carm_subdivides_as_the_reference_solver` adds
 /// adaptive subdivision's).
@@ -34,7 +34,7 @@ fn carm_and_reference(name: &str, extra: &[&str]) -> (serde_json::Value, serde_j
     let carm = radiosity(&scratch(name), &[&carm_flags[..], extra].concat());
     let reference = radiosity(
         &scratch(&format!("{name}-reference")),
-        &[&["--solver", "reference"][..], extra].concat(),
+        &[&REFERENCE_AS_CARM[..], extra].concat(),
     );
     (carm, reference)
 }
@@ -151,7 +151,7 @@ fn carm_rehashes_points_a_full_node_cannot_take() {
 
 #[test]
 fn carm_on_1_4_13_and_40_nodes_agrees_with_the_reference_solver() {
-    let reference = radiosity(&scratch("carm-reference"), &["--solver", "reference"]);
+    let reference = radiosity(&scratch("carm-reference"), &REFERENCE_AS_CARM);
     for (nodes, report) in carm_runs() {
         assert_agree(report, &reference, &format!("{nodes} nodes: "));
     }
@@ -193,7 +193,7 @@ fn carm_subdivides_as_the_reference_solver() {
     let reference = solve(
         &scratch("carm-adapt-reference"),
         ADAPTIVE,
-        &["--solver", "reference"],
+        &REFERENCE_AS_CARM,
     );
     let points = |r: &serde_json::Value| r["scene"]["final_vertices"].as_u64().expect("a count");
     let mut first: Option<serde_json::Value> = None;

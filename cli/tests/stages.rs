@@ -126,7 +126,7 @@ fn carm_leaves_out_shadow_rays_where_the_reference_solver_does() {
     let (full, _) = convex_room(&scratch("stages-carm-full"), &all);
     let (reference, _) = convex_room(
         &scratch("stages-carm-reference"),
-        &["--solver", "reference"],
+        &["--solver", "reference", "--element-means", "linear"],
     );
     assert!(lean_err.contains("left out: shadow rays"), "{lean_err}");
     assert!(left_out(&lean).iter().any(|s| s.starts_with("shadow rays")));

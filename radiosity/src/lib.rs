@@ -31,6 +31,7 @@ pub mod output;
 pub mod overshoot;
 pub mod packet;
 pub mod pathtrace;
+pub mod quadrature;
 pub mod refine;
 pub mod rng;
 pub mod scene;

@@ -4,7 +4,8 @@
 //! Each shot takes the patch with the most unshot power, computes the form factor from every
 //! sample point to it ([`crate::kernels::shoot_batch`]), refines edges where the shot's
 //! contribution changes fast and is not linear, and books the power:
-//! - each element receives `A_e · ΔB_src · mean(F at its corners)`;
+//! - each element receives `A_e · ΔB_src · mean(F)`, its mean taken from the form factors at the
+//!   vertices exactly for quadratic fields ([`crate::quadrature`]);
 //! - it absorbs `(1 - ρ)` of that and adds `ρ` of it to its own unshot power (a patch's is the
 //!   sum over its elements, and a patch shoots from where its elements hold it:
 //!   [`SourceDensity`]; each channel from where its own power is when the light a patch
@@ -27,6 +28,7 @@ use crate::kernels::{SamplePoint, shoot_batch_sets, shoot_batch_visibility};
 use crate::mesh::Mesh;
 use crate::octree::{Octree, OctreeConfig};
 use crate::overshoot::{self, Acceleration};
+use crate::quadrature::{ElementMeans, MeanRule};
 use crate::refine;
 use crate::scene::Scene;
 
@@ -185,6 +187,9 @@ pub struct SolverConfig {
     /// channels lie differently ([`channels_differ`]); false: every channel from the
     /// channels' summed density, as carm.occ shoots (programs/README.md, "Not there yet").
     pub channel_densities: bool,
+    /// How an element's received power is taken from its corners' form factors, and an
+    /// object's mean from its vertices' irradiance ([`MeanRule`]).
+    pub element_means: MeanRule,
 }
 
 impl Default for SolverConfig {
@@ -202,6 +207,7 @@ impl Default for SolverConfig {
             record_every: 0.05,
             octree: OctreeConfig::default(),
             channel_densities: true,
+            element_means: MeanRule::Quadratic,
         }
     }
 }
@@ -300,6 +306,13 @@ pub struct Solver<'a> {
     /// leaves out.
     back_share: Vec<Vec<f32>>,
     element_area: Vec<f64>,
+    /// The elements' means of a field at the vertices, fitted to the mesh after each shot's
+    /// refinement.
+    means: ElementMeans,
+    /// Per object: its area and the power its elements have received (before reflection), as
+    /// [`Solver::book`] books it: the running tally the stopping rule reads
+    /// ([`Solver::estimated_errors`]).
+    object_received: Vec<(f64, DVec3)>,
     /// Unshot power of each element (a patch's is the sum over its elements): where on the
     /// patch the power it shoots comes from.
     element_unshot: Vec<DVec3>,
@@ -357,6 +370,12 @@ impl<'a> Solver<'a> {
             scene.diagonal(),
             DENSITY_GRID,
         );
+        let means = ElementMeans::new(&mesh, config.element_means);
+        let object_received = mesh
+            .object_areas(scene.objects.len())
+            .into_iter()
+            .map(|a| (a, DVec3::ZERO))
+            .collect();
         Solver {
             analysis,
             stages: Stages::for_scene(&analysis, config.all_stages),
@@ -378,6 +397,8 @@ impl<'a> Solver<'a> {
             back_share,
             element_area,
             element_unshot,
+            means,
+            object_received,
             shot_total: DVec3::ZERO,
             received_total: DVec3::ZERO,
         }
@@ -460,6 +481,7 @@ impl<'a> Solver<'a> {
         };
         let factors = self.shoot_all(src, &densities, &form_factor);
         let mut factors = self.refine(src, factors, shot, &densities, &form_factor);
+        self.means.fit(&self.mesh);
         if self.stages.close_rows {
             self.close_rows(src, &densities, &mut factors);
         }
@@ -473,9 +495,7 @@ impl<'a> Solver<'a> {
     /// sends but the share that lands on the backs of sheets ([`analysis::row_scale`]; only for
     /// closed scenes).
     fn close_row(&self, src: usize, density: Option<&SourceDensity>, factors: &mut [f32]) {
-        let received: f64 = (self.mesh.elements.iter().zip(&self.element_area))
-            .map(|(e, &a)| a * e.v.iter().map(|&v| factors[v as usize] as f64).sum::<f64>() / 3.0)
-            .sum();
+        let received = self.means.integral(&self.mesh, factors);
         let target = self.patch_area[src] * (1.0 - self.back_share_of(src, density));
         let scale = analysis::row_scale(target, received) as f32;
         factors.iter_mut().for_each(|f| *f *= scale);
@@ -849,24 +869,19 @@ impl<'a> Solver<'a> {
             }
         }
         let db = delta_b.as_dvec3();
+        let means = match &factors.channels {
+            None => self.means.means(&self.mesh, &factors.sum),
+            Some(per) => {
+                let per: Vec<Vec3> = per.iter().map(|&f| Vec3::from(f)).collect();
+                self.means.means(&self.mesh, &per)
+            }
+        };
         let mut received = DVec3::ZERO;
         let mut absorbed = DVec3::ZERO;
         let elements = self.mesh.elements.iter().zip(&self.element_area);
-        for ((e, &area), u) in elements.zip(&mut self.element_unshot) {
-            let power = match &factors.channels {
-                None => {
-                    let f =
-                        e.v.iter()
-                            .map(|&v| factors.sum[v as usize] as f64)
-                            .sum::<f64>()
-                            / 3.0;
-                    db * (f * area)
-                }
-                Some(per) => {
-                    let f = e.v.iter().map(|&v| Vec3::from(per[v as usize]).as_dvec3());
-                    db * (f.sum::<DVec3>() / 3.0 * area)
-                }
-            };
+        for (((e, &area), u), f) in elements.zip(&mut self.element_unshot).zip(means) {
+            let power = db * (f * area);
+            self.object_received[e.object as usize].1 += power;
             let rho = self.scene.objects[e.object as usize].reflectance.as_dvec3();
             received += power;
             absorbed += power * (DVec3::ONE - rho);
@@ -937,10 +952,11 @@ impl<'a> Solver<'a> {
     /// `ρ H_amb / (B + ρ H_amb)`, worst channel (objects with no area or reflectance: 0). It
     /// assumes the power still unshot lands evenly; objects far from where it is (a room lit
     /// only through a door, not yet reached) have `B` near 0 and so an estimate near 1, which
-    /// keeps the solve going until light reaches them.
+    /// keeps the solve going until light reaches them. The means are those of the power each
+    /// object's elements have been booked (a running tally, not a pass over the mesh).
     pub fn estimated_errors(&self) -> Vec<f64> {
         let ambient = self.ambient_bound();
-        self.object_means()
+        self.means_of(self.object_received.clone())
             .into_iter()
             .zip(&self.scene.objects)
             .map(|((area, b), o)| {
@@ -962,14 +978,21 @@ impl<'a> Solver<'a> {
         el.v.map(|v| emitted + obj.reflectance * (self.irradiance[v as usize] + ambient))
     }
 
-    /// Returns per-object `(area, mean B)` (area-weighted over elements; no ambient term).
-    /// (B is linear in the irradiance H, so each object's mean is `E + ρ` times its mean H.)
+    /// Returns per-object `(area, mean B)` (area-weighted over elements, each element's mean
+    /// of the irradiance at the vertices taken by [`SolverConfig::element_means`]; no ambient
+    /// term). (B is linear in the irradiance H, so each object's mean is `E + ρ` times its
+    /// mean H.)
     pub fn object_means(&self) -> Vec<(f64, DVec3)> {
         let mut out = vec![(0.0, DVec3::ZERO); self.scene.objects.len()];
-        let h = &self.irradiance;
-        for (e, &a) in self.mesh.elements.iter().zip(&self.element_area) {
-            let [i, j, k] = e.v.map(|v| v as usize);
-            let mean = (h[i] + h[j] + h[k]).as_dvec3() / 3.0;
+        let rebuilt;
+        let means = if self.means.fits(&self.mesh) {
+            &self.means
+        } else {
+            rebuilt = ElementMeans::new(&self.mesh, self.config.element_means);
+            &rebuilt
+        };
+        let h = means.means(&self.mesh, &self.irradiance);
+        for ((e, &a), mean) in self.mesh.elements.iter().zip(&self.element_area).zip(h) {
             let o = &mut out[e.object as usize];
             o.0 += a;
             o.1 += mean * a;

@@ -17,6 +17,7 @@ use occ_radiosity::output::compare;
 use occ_radiosity::output::{image, plot, ply, probe, report, truth};
 use occ_radiosity::overshoot::Acceleration;
 use occ_radiosity::pathtrace::{PathTraceConfig, PathTracer};
+use occ_radiosity::quadrature::MeanRule;
 use occ_radiosity::scene::{self, Scene};
 use occ_radiosity::solver::{AdaptConfig, Solver, SolverConfig, Until};
 
@@ -114,6 +115,12 @@ pub struct Args {
     /// radiosity/REFERENCES.md, "The dim faces' colours"); both solvers.
     #[arg(long)]
     pub summed_density: bool,
+    /// How a shot's power into an element, and an object's mean, are taken from the values at
+    /// the element's corners: quadratic (with the curvature the neighbouring vertices show;
+    /// the reference solver's default: radiosity/REFERENCES.md, "Element means exact for
+    /// quadratics") or linear (the corners' average; carm.occ books so, and takes only that).
+    #[arg(long)]
+    pub element_means: Option<MeanRule>,
     /// Where carm.occ's nodes run: inproc (this process) or mpi (spread over the ranks of
     /// `mpirun`, rank 0 playing the host and writing the outputs; needs a build with
     /// --features mpi).
@@ -650,6 +657,12 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
         "--image-size must be between 8 and 8192"
     );
     anyhow::ensure!(args.nodes >= 1, "--nodes must be at least 1");
+    anyhow::ensure!(
+        args.element_means != Some(MeanRule::Quadratic)
+            || matches!(args.solver, SolverKind::Reference),
+        "--element-means quadratic is the reference solver's (--solver reference): carm.occ's \
+         nodes book a shot's power by the corners' average (programs/README.md, \"Not there yet\")"
+    );
     if let SolverKind::Carm = args.solver {
         anyhow::ensure!(
             !matches!(args.until, Until::Seconds(_)),
@@ -690,6 +703,15 @@ const CONVERGED: f64 = 1e-4;
 /// The fewest rays per form factor `--converge` uses.
 const CONVERGED_RAYS: u32 = 64;
 
+/// The rule for elements' means: as given, else quadratic for the reference solver and linear
+/// (what its nodes book) for carm.occ.
+fn element_means(args: &Args) -> MeanRule {
+    args.element_means.unwrap_or(match args.solver {
+        SolverKind::Reference => MeanRule::Quadratic,
+        SolverKind::Carm => MeanRule::Linear,
+    })
+}
+
 fn solver_config(args: &Args, diag: f32, element_size: f32) -> SolverConfig {
     let adapt = (!args.no_adapt).then_some(AdaptConfig {
         difference: args.adapt_difference,
@@ -726,6 +748,7 @@ fn solver_config(args: &Args, diag: f32, element_size: f32) -> SolverConfig {
             ..OctreeConfig::default()
         },
         channel_densities: !args.summed_density,
+        element_means: element_means(args),
         ..SolverConfig::default()
     }
 }
