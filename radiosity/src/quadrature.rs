@@ -23,6 +23,7 @@
 //! quadrature of a positive field may.
 
 use std::ops::{Add, Mul};
+use std::sync::OnceLock;
 
 use glam::{DVec3, Vec3};
 
@@ -93,8 +94,9 @@ pub struct ElementMeans {
     inverse_weight: Vec<f32>,
     /// Per vertex: that summed area.
     weight: Vec<f32>,
-    /// Per vertex: its weight in the integral over the mesh ([`ElementMeans::integral`]).
-    integral: Vec<f64>,
+    /// Per vertex: its weight in the integral over the mesh ([`ElementMeans::integral`]),
+    /// worked out when first asked for after a fit (only scenes whose rows are closed ask).
+    integral: OnceLock<Vec<f64>>,
 }
 
 impl ElementMeans {
@@ -105,7 +107,7 @@ impl ElementMeans {
             stencils: Vec::new(),
             inverse_weight: Vec::new(),
             weight: Vec::new(),
-            integral: Vec::new(),
+            integral: OnceLock::new(),
         };
         means.fit(mesh);
         means
@@ -156,13 +158,12 @@ impl ElementMeans {
             }
         }
         self.inverse_weight.resize(mesh.vertices.len(), 0.0);
-        let changed = !touched.is_empty() || self.integral.len() != mesh.vertices.len();
+        if !touched.is_empty() {
+            self.integral = OnceLock::new();
+        }
         for v in touched {
             let w = self.weight[v as usize];
             self.inverse_weight[v as usize] = if w > 0.0 { 1.0 / w } else { 0.0 };
-        }
-        if changed {
-            self.integral = self.quadratic_integral(mesh);
         }
     }
 
@@ -180,7 +181,8 @@ impl ElementMeans {
                 .sum();
         }
         debug_assert!(self.fits(mesh));
-        (self.integral.iter().zip(values))
+        let weights = self.integral.get_or_init(|| self.quadratic_integral(mesh));
+        (weights.iter().zip(values))
             .map(|(&w, &f)| w * f as f64)
             .sum()
     }
@@ -221,8 +223,10 @@ impl ElementMeans {
             return mesh.elements.iter().map(|e| linear(e.v)).collect();
         }
         debug_assert!(self.fits(mesh));
-        // The recovered gradient at each vertex, one component field per axis.
+        // The recovered gradient at each vertex (the area-weighted mean of its elements'), one
+        // component field per axis, and whether any element lent it one.
         let mut grad = vec![[T::default(); 3]; values.len()];
+        let mut sloped = vec![false; values.len()];
         for (e, (_, s)) in mesh.elements.iter().zip(&self.stencils) {
             let Some(s) = s else { continue };
             let f = e.v.map(|v| values[v as usize]);
@@ -231,10 +235,12 @@ impl ElementMeans {
             }
             let g = gradient(s, f);
             for &v in &e.v {
+                let share = s.area * self.inverse_weight[v as usize];
                 let at = &mut grad[v as usize];
                 for k in 0..3 {
-                    at[k] = at[k] + g[k] * s.area;
+                    at[k] = at[k] + g[k] * share;
                 }
+                sloped[v as usize] = true;
             }
         }
         mesh.elements
@@ -243,14 +249,12 @@ impl ElementMeans {
             .map(|(e, (_, s))| {
                 let base = linear(e.v);
                 let Some(s) = s else { return base };
-                let zero = [T::default(); 3];
-                if base == DVec3::ZERO && e.v.iter().all(|&v| grad[v as usize] == zero) {
+                if !e.v.iter().any(|&v| sloped[v as usize]) {
                     return base;
                 }
                 let mut curve = T::default();
-                for (i, &v) in e.v.iter().enumerate() {
+                for (&v, r) in e.v.iter().zip(&s.reach) {
                     let g = grad[v as usize];
-                    let r = s.reach[i] * self.inverse_weight[v as usize];
                     curve = curve + g[0] * r.x + g[1] * r.y + g[2] * r.z;
                 }
                 base + curve.wide()
