@@ -427,6 +427,11 @@ fn carm_refuses_what_it_cannot_do_clearly() {
             ][..],
             "carm.occ runs on 1 to 1024 nodes",
         ),
+        // Its nodes book by the corners' average.
+        (
+            &["--solver", "carm", "--element-means", "quadratic"][..],
+            "--element-means quadratic is the reference solver's",
+        ),
         // More rays per form factor than carm.occ's fixed arrays take.
         (
             &[
