@@ -555,13 +555,47 @@ pub fn form_factor_sets<const N: usize>(
     samples: &[Vec3],
     weights: impl SampleWeights<N>,
     config: &FormFactorConfig,
-    mut occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
+    occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
 ) -> (FormFactor, [f32; N]) {
     if !faces(p, n, src) {
         return (FormFactor::default(), [0.0; N]);
     }
-    let ns = src.normal();
-    let area = src.area();
+    let facing = Facing::new(src);
+    form_factor_facing(p, n, &facing, samples, weights, config, occluded)
+}
+
+/// A source as [`form_factor_facing`] takes it: its triangle with its unit normal and area,
+/// worked out once for the receivers of a batch.
+#[derive(Clone, Copy, Debug)]
+pub struct Facing<'t> {
+    src: &'t Tri,
+    normal: Vec3,
+    area: f32,
+}
+
+impl<'t> Facing<'t> {
+    /// `src` with its normal and area.
+    pub fn new(src: &'t Tri) -> Facing<'t> {
+        Facing {
+            src,
+            normal: src.normal(),
+            area: src.area(),
+        }
+    }
+}
+
+/// [`form_factor_sets`] for a receiver known to face the source ([`faces`]; as one that
+/// [`receiver_rays`] gives rays is): the same answer, without asking again.
+pub fn form_factor_facing<const N: usize>(
+    p: Vec3,
+    n: Vec3,
+    facing: &Facing,
+    samples: &[Vec3],
+    weights: impl SampleWeights<N>,
+    config: &FormFactorConfig,
+    mut occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
+) -> (FormFactor, [f32; N]) {
+    let (src, ns, area) = (facing.src, facing.normal, facing.area);
     let d_min2 = (src.closest_point(p) - p).length_squared();
     let sub_area = area / samples.len() as f32;
     let analytic = sub_area > config.max_disc_bias * std::f32::consts::PI * d_min2;

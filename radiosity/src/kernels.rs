@@ -10,8 +10,8 @@
 use glam::Vec3;
 
 use crate::formfactor::{
-    DensitySet, FormFactorConfig, SourceDensity, form_factor_sets, form_factor_weighted,
-    receiver_samples, receiver_samples_sets,
+    DensitySet, Facing, FormFactorConfig, SourceDensity, form_factor_facing, receiver_samples,
+    receiver_samples_sets,
 };
 use crate::geom::Tri;
 use crate::mesh::Vertex;
@@ -108,6 +108,7 @@ pub fn shoot_batch_visibility(
     let mut samples = Vec::with_capacity(config.rays as usize + 8);
     let mut weights = Vec::with_capacity(config.rays as usize + 8);
     let mut stats = BatchStats::default();
+    let facing = Facing::new(source);
     for (p, o) in points.iter().zip(out.iter_mut()) {
         stats.form_factors += 1;
         let (eval, normal) = (Vec3::from(p.eval), Vec3::from(p.normal));
@@ -124,12 +125,13 @@ pub fn shoot_batch_visibility(
             *o = 0.0;
             continue;
         }
-        let f = form_factor_weighted(
+        // (a receiver given rays faces the source)
+        let (f, _) = form_factor_facing(
             eval,
             normal,
-            source,
+            &facing,
             &samples,
-            &weights,
+            weights.as_slice(),
             config,
             |_, origin, d, tmax| {
                 octree.is_some_and(|o| o.occluded(origin, d, 0.0, tmax, Traversal::Ropes))
@@ -159,6 +161,7 @@ pub fn shoot_batch_sets<const N: usize>(
     let mut samples = Vec::with_capacity(config.rays as usize + 8);
     let mut weights = Vec::with_capacity(config.rays as usize + 8);
     let mut stats = BatchStats::default();
+    let facing = Facing::new(source);
     for (p, o) in points.iter().zip(out.iter_mut()) {
         stats.form_factors += 1;
         let (eval, normal) = (Vec3::from(p.eval), Vec3::from(p.normal));
@@ -175,10 +178,11 @@ pub fn shoot_batch_sets<const N: usize>(
             *o = [0.0; N];
             continue;
         }
-        let (f, values) = form_factor_sets(
+        // (a receiver given rays faces the source)
+        let (f, values) = form_factor_facing(
             eval,
             normal,
-            source,
+            &facing,
             &samples,
             (weights.as_slice(), densities.uniform()),
             config,
