@@ -70,16 +70,39 @@ impl std::str::FromStr for MeanRule {
     }
 }
 
-/// One element's part in the quadratic rule.
-#[derive(Clone, Copy, Debug)]
+/// One element's part in the quadratic rule, kept small (the passes of a shot stream it):
+/// corner 0's gradient and reach are minus the sum of the other two's.
+#[derive(Clone, Copy, Debug, Default)]
 struct Stencil {
-    /// Area (the weight of its gradient at its corners).
+    /// Area (the weight of its gradient at its corners); 0: none, the corners' average (a
+    /// hidden corner, or a degenerate element).
     area: f32,
-    /// Gradients of the corners' barycentric coordinates (in the element's plane).
-    grad: [Vec3; 3],
-    /// Per corner `i`, `(pᵢ₊₁ + pᵢ₋₁ − 2pᵢ) / 24`: what the gradient at corner `i` adds to
-    /// the mean.
-    reach: [Vec3; 3],
+    /// Gradients of corners 1 and 2's barycentric coordinates (in the element's plane).
+    grad: [Vec3; 2],
+    /// Per corner `i` (1 and 2), `(pᵢ₊₁ + pᵢ₋₁ − 2pᵢ) / 24`: what the gradient at corner `i`
+    /// adds to the mean.
+    reach: [Vec3; 2],
+}
+
+impl Stencil {
+    /// Whether the element takes part (else it keeps the corners' average).
+    fn some(&self) -> bool {
+        self.area > 0.0
+    }
+
+    /// The gradients of the three corners' barycentric coordinates.
+    fn grads(&self) -> [Vec3; 3] {
+        [-(self.grad[0] + self.grad[1]), self.grad[0], self.grad[1]]
+    }
+
+    /// The three corners' reaches.
+    fn reaches(&self) -> [Vec3; 3] {
+        [
+            -(self.reach[0] + self.reach[1]),
+            self.reach[0],
+            self.reach[1],
+        ]
+    }
 }
 
 /// The means of a mesh's elements: built for a mesh, and kept fitting it as refinement splits
@@ -87,9 +110,9 @@ struct Stencil {
 #[derive(Clone, Debug)]
 pub struct ElementMeans {
     rule: MeanRule,
-    /// Per element: the corners it was fitted with, and its stencil (`None`: the corners'
-    /// average).
-    stencils: Vec<([u32; 3], Option<Stencil>)>,
+    /// Per element: the corners it was fitted with, and its stencil.
+    corners: Vec<[u32; 3]>,
+    stencils: Vec<Stencil>,
     /// Per vertex: one over the summed area of the elements that lend it a gradient (0: none).
     inverse_weight: Vec<f32>,
     /// Per vertex: that summed area.
@@ -104,6 +127,7 @@ impl ElementMeans {
     pub fn new(mesh: &Mesh, rule: MeanRule) -> ElementMeans {
         let mut means = ElementMeans {
             rule,
+            corners: Vec::new(),
             stencils: Vec::new(),
             inverse_weight: Vec::new(),
             weight: Vec::new(),
@@ -122,8 +146,8 @@ impl ElementMeans {
     pub fn fits(&self, mesh: &Mesh) -> bool {
         self.rule == MeanRule::Linear
             || (self.weight.len() == mesh.vertices.len()
-                && self.stencils.len() == mesh.elements.len()
-                && (self.stencils.iter().zip(&mesh.elements)).all(|(s, e)| s.0 == e.v))
+                && self.corners.len() == mesh.elements.len()
+                && (self.corners.iter().zip(&mesh.elements)).all(|(c, e)| *c == e.v))
     }
 
     /// Fits the means to `mesh` after refinement (which splits elements in place, each keeping
@@ -136,25 +160,25 @@ impl ElementMeans {
         self.weight.resize(mesh.vertices.len(), 0.0);
         let mut touched = Vec::new();
         for (i, e) in mesh.elements.iter().enumerate() {
-            if self.stencils.get(i).is_some_and(|s| s.0 == e.v) {
+            if self.corners.get(i) == Some(&e.v) {
                 continue;
             }
-            if let Some((corners, Some(old))) = self.stencils.get(i) {
-                for &v in corners {
+            if let (Some(corners), Some(old)) = (self.corners.get(i), self.stencils.get(i)) {
+                for &v in corners.iter().filter(|_| old.some()) {
                     self.weight[v as usize] -= old.area;
                     touched.push(v);
                 }
             }
-            let fitted = (e.v, element_stencil(mesh, e.v));
-            if let Some(s) = &fitted.1 {
-                for &v in &e.v {
-                    self.weight[v as usize] += s.area;
-                    touched.push(v);
-                }
+            let fitted = element_stencil(mesh, e.v).unwrap_or_default();
+            for &v in e.v.iter().filter(|_| fitted.some()) {
+                self.weight[v as usize] += fitted.area;
+                touched.push(v);
             }
-            match self.stencils.get_mut(i) {
-                Some(slot) => *slot = fitted,
-                None => self.stencils.push(fitted),
+            if i < self.corners.len() {
+                (self.corners[i], self.stencils[i]) = (e.v, fitted);
+            } else {
+                self.corners.push(e.v);
+                self.stencils.push(fitted);
             }
         }
         self.inverse_weight.resize(mesh.vertices.len(), 0.0);
@@ -194,19 +218,19 @@ impl ElementMeans {
         let mut integral = linear_integral(mesh);
         // r[u]: Σ over the elements e at u of A_e reach_e(u), over u's summed area.
         let mut r = vec![Vec3::ZERO; mesh.vertices.len()];
-        for (e, (_, s)) in mesh.elements.iter().zip(&self.stencils) {
-            if let Some(s) = s {
-                for (i, &v) in e.v.iter().enumerate() {
-                    r[v as usize] += s.reach[i] * (s.area * self.inverse_weight[v as usize]);
+        for (e, s) in mesh.elements.iter().zip(&self.stencils) {
+            if s.some() {
+                for (&v, reach) in e.v.iter().zip(s.reaches()) {
+                    r[v as usize] += reach * (s.area * self.inverse_weight[v as usize]);
                 }
             }
         }
         // The gradient each element lends its corners weighs its own corners' values.
-        for (e, (_, s)) in mesh.elements.iter().zip(&self.stencils) {
-            if let Some(s) = s {
+        for (e, s) in mesh.elements.iter().zip(&self.stencils) {
+            if s.some() {
                 let reach: Vec3 = e.v.iter().map(|&v| r[v as usize]).sum();
-                for (j, &v) in e.v.iter().enumerate() {
-                    integral[v as usize] += f64::from(s.area * s.grad[j].dot(reach));
+                for (&v, grad) in e.v.iter().zip(s.grads()) {
+                    integral[v as usize] += f64::from(s.area * grad.dot(reach));
                 }
             }
         }
@@ -227,8 +251,10 @@ impl ElementMeans {
         // component field per axis, and whether any element lent it one.
         let mut grad = vec![[T::default(); 3]; values.len()];
         let mut sloped = vec![false; values.len()];
-        for (e, (_, s)) in mesh.elements.iter().zip(&self.stencils) {
-            let Some(s) = s else { continue };
+        for (e, s) in mesh.elements.iter().zip(&self.stencils) {
+            if !s.some() {
+                continue;
+            }
             let f = e.v.map(|v| values[v as usize]);
             if f.iter().all(|&x| x == T::default()) {
                 continue; // no slope (most receivers of a shot face away from its source)
@@ -246,16 +272,18 @@ impl ElementMeans {
         mesh.elements
             .iter()
             .zip(&self.stencils)
-            .map(|(e, (_, s))| {
+            .map(|(e, s)| {
                 let base = linear(e.v);
-                let Some(s) = s else { return base };
-                if !e.v.iter().any(|&v| sloped[v as usize]) {
+                if !s.some() || !e.v.iter().any(|&v| sloped[v as usize]) {
                     return base;
                 }
+                // Σᵢ gᵢ·rᵢ with r₀ = −(r₁ + r₂): (g₁ − g₀)·r₁ + (g₂ − g₀)·r₂.
+                let [g0, g1, g2] = e.v.map(|v| grad[v as usize]);
                 let mut curve = T::default();
-                for (&v, r) in e.v.iter().zip(&s.reach) {
-                    let g = grad[v as usize];
-                    curve = curve + g[0] * r.x + g[1] * r.y + g[2] * r.z;
+                for k in 0..3 {
+                    let minus = g0[k] * -1.0;
+                    curve =
+                        curve + (g1[k] + minus) * s.reach[0][k] + (g2[k] + minus) * s.reach[1][k];
                 }
                 base + curve.wide()
             })
@@ -293,8 +321,8 @@ fn stencil(p: [Vec3; 3]) -> Option<Stencil> {
     }
     let unit = n / twice_area;
     // ∇λᵢ points from the opposite edge towards corner i, of length 1 / height.
-    let grad = [0, 1, 2].map(|i| unit.cross(p[(i + 2) % 3] - p[(i + 1) % 3]) / twice_area);
-    let reach = [0, 1, 2].map(|i| (p[(i + 1) % 3] + p[(i + 2) % 3] - 2.0 * p[i]) / 24.0);
+    let grad = [1, 2].map(|i| unit.cross(p[(i + 2) % 3] - p[(i + 1) % 3]) / twice_area);
+    let reach = [1, 2].map(|i| (p[(i + 1) % 3] + p[(i + 2) % 3] - 2.0 * p[i]) / 24.0);
     Some(Stencil {
         area: 0.5 * twice_area,
         grad,
@@ -302,9 +330,11 @@ fn stencil(p: [Vec3; 3]) -> Option<Stencil> {
     })
 }
 
-/// The gradient of the linear interpolant of `f` over the element of `s`, per axis.
+/// The gradient of the linear interpolant of `f` over the element of `s`, per axis:
+/// `Σᵢ fᵢ ∇λᵢ = (f₁ − f₀) ∇λ₁ + (f₂ − f₀) ∇λ₂`.
 fn gradient<T: Field>(s: &Stencil, f: [T; 3]) -> [T; 3] {
-    let axis = |k: usize| f[0] * s.grad[0][k] + f[1] * s.grad[1][k] + f[2] * s.grad[2][k];
+    let (d1, d2) = (f[1] + f[0] * -1.0, f[2] + f[0] * -1.0);
+    let axis = |k: usize| d1 * s.grad[0][k] + d2 * s.grad[1][k];
     [axis(0), axis(1), axis(2)]
 }
 
