@@ -80,7 +80,8 @@ pub fn shoot_batch(
 }
 
 /// [`shoot_batch`] for a source whose unshot radiosity varies as `density` says (see
-/// [`form_factor_weighted`]; `None`: uniform, the same answers as [`shoot_batch`]).
+/// [`crate::formfactor::form_factor_weighted`]; `None`: uniform, the same answers as
+/// [`shoot_batch`]).
 pub fn shoot_batch_weighted(
     octree: &Octree,
     source: &Tri,
