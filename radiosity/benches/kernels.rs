@@ -22,6 +22,7 @@ use occ_radiosity::kernels::{SamplePoint, shoot_batch};
 use occ_radiosity::mesh::{Mesh, MeshConfig};
 use occ_radiosity::octree::flat::{CURSOR_INTS, START};
 use occ_radiosity::octree::{Octree, OctreeConfig, Traversal};
+use occ_radiosity::quadrature::MeanRule;
 use occ_radiosity::rng::Pcg32;
 use occ_radiosity::scene::cornell;
 use occ_radiosity::solver::{Solver, SolverConfig, Until};
@@ -200,9 +201,13 @@ fn solve(c: &mut Criterion) {
     let scene = cornell::load(true).expect("cornell");
     let mut group = c.benchmark_group("solve_cornell");
     group.sample_size(10);
-    {
+    // The default element means (quadratic) against the corners' average: the rule's cost.
+    for (rule, name) in [
+        (MeanRule::Quadratic, ""),
+        (MeanRule::Linear, "_linear_means"),
+    ] {
         let until = 0.01;
-        group.bench_function(format!("unshot_{until}_1_thread"), |b| {
+        group.bench_function(format!("unshot_{until}_1_thread{name}"), |b| {
             b.iter(|| {
                 pool.install(|| {
                     let mesh = Mesh::from_scene(
@@ -219,6 +224,7 @@ fn solve(c: &mut Criterion) {
                     let config = SolverConfig {
                         form_factor,
                         until: Until::Unshot(until),
+                        element_means: rule,
                         ..SolverConfig::default()
                     };
                     let mut solver = Solver::new(&scene, mesh, config);
