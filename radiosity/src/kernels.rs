@@ -10,8 +10,7 @@
 use glam::Vec3;
 
 use crate::formfactor::{
-    DensitySet, Facing, FormFactorConfig, SourceDensity, form_factor_facing, receiver_samples,
-    receiver_samples_sets,
+    DensitySet, Facing, FormFactorConfig, SourceDensity, form_factor_facing, receiver_samples_sets,
 };
 use crate::geom::Tri;
 use crate::mesh::Vertex;
@@ -105,44 +104,10 @@ pub fn shoot_batch_visibility(
     seed: u64,
     out: &mut [f32],
 ) -> BatchStats {
-    let mut rng = Pcg32::new(seed, 0x5eed);
-    let mut samples = Vec::with_capacity(config.rays as usize + 8);
-    let mut weights = Vec::with_capacity(config.rays as usize + 8);
-    let mut stats = BatchStats::default();
-    let facing = Facing::new(source);
-    for (p, o) in points.iter().zip(out.iter_mut()) {
-        stats.form_factors += 1;
-        let (eval, normal) = (Vec3::from(p.eval), Vec3::from(p.normal));
-        let rays = receiver_samples(
-            (eval, normal),
-            source,
-            config,
-            density,
-            &mut rng,
-            &mut samples,
-            &mut weights,
-        );
-        if rays == 0 {
-            *o = 0.0;
-            continue;
-        }
-        // (a receiver given rays faces the source)
-        let (f, _) = form_factor_facing(
-            eval,
-            normal,
-            &facing,
-            &samples,
-            weights.as_slice(),
-            config,
-            |_, origin, d, tmax| {
-                octree.is_some_and(|o| o.occluded(origin, d, 0.0, tmax, Traversal::Ropes))
-            },
-        );
-        *o = f.value;
-        stats.rays += if octree.is_some() { f.rays as u64 } else { 0 };
-        stats.analytic += f.analytic as u64;
-    }
-    stats
+    // A set of one density: the same samples, weights and answers as one density alone.
+    let set = DensitySet::new([density]);
+    let (out, _) = out.as_chunks_mut::<1>();
+    shoot_batch_sets(octree, source, &set, points, config, seed, out)
 }
 
 /// [`shoot_batch_visibility`] for several densities of the source at once (a shot's channels

@@ -137,11 +137,6 @@ impl ElementMeans {
         means
     }
 
-    /// The rule.
-    pub fn rule(&self) -> MeanRule {
-        self.rule
-    }
-
     /// Whether these means fit `mesh` as it is now.
     pub fn fits(&self, mesh: &Mesh) -> bool {
         self.rule == MeanRule::Linear
