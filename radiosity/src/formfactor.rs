@@ -179,7 +179,15 @@ pub struct DensitySet<const N: usize> {
     g: u32,
     cells: Vec<[f32; N]>,
     uniform: [bool; N],
+    /// The side of a block of cells ([`BLOCK`] when it divides `g`, else 1), and each block's
+    /// mean, row by row (`balance_weights` takes the cells away from the kernel's peak so).
+    block: u32,
+    blocks: Vec<[f32; N]>,
 }
+
+/// The side of the blocks of a density's cells that `balance_weights` takes as one away from
+/// the kernel's peak.
+const BLOCK: u32 = 3;
 
 impl<const N: usize> DensitySet<N> {
     /// The set of `densities` (`None`: uniform); those given must share their grid, as
@@ -187,13 +195,31 @@ impl<const N: usize> DensitySet<N> {
     pub fn new<C: AsRef<[f32]>>(densities: [Option<&SourceDensity<C>>; N]) -> DensitySet<N> {
         let g = densities.iter().flatten().map(|d| d.g).next().unwrap_or(1);
         debug_assert!(densities.iter().flatten().all(|d| d.g == g));
-        let cells = (0..(g * g) as usize)
+        let cells: Vec<[f32; N]> = (0..(g * g) as usize)
             .map(|i| densities.map(|d| d.map_or(1.0, |d| d.cells.as_ref()[i])))
+            .collect();
+        let block = if g % BLOCK == 0 { BLOCK } else { 1 };
+        let side = g / block;
+        let share = 1.0 / (block * block) as f32;
+        let blocks = (0..side * side)
+            .map(|b| {
+                let (bi, bj) = (b / side, b % side);
+                let mut mean = [0.0f32; N];
+                for i in bi * block..(bi + 1) * block {
+                    for j in bj * block..(bj + 1) * block {
+                        let d = cells[(i * g + j) as usize];
+                        (0..N).for_each(|c| mean[c] += d[c] * share);
+                    }
+                }
+                mean
+            })
             .collect();
         DensitySet {
             g,
             cells,
             uniform: densities.map(|d| d.is_none()),
+            block,
+            blocks,
         }
     }
 
@@ -433,8 +459,14 @@ pub fn receiver_samples<C: AsRef<[f32]>>(
     });
     if let Some(d) = density {
         let (planes, _) = weights.as_chunks_mut::<1>();
-        let at = (d.g, |i: usize| [d.cells()[i]]);
-        balance_weights(receiver, src, out, planes, [false], at, config);
+        balance_weights(
+            receiver,
+            src,
+            out,
+            planes,
+            &DensitySet::new([Some(d)]),
+            config,
+        );
     }
     rays
 }
@@ -454,9 +486,7 @@ pub fn receiver_samples_sets<const N: usize>(
     let rays = receiver_slot(receiver, src, config, rng, out, |rays, rng, out| {
         source_samples_sets(src, rays, densities, rng, out, weights)
     });
-    let uniform = densities.uniform();
-    let at = (densities.g, |i: usize| densities.cells[i]);
-    balance_weights(receiver, src, out, weights, uniform, at, config);
+    balance_weights(receiver, src, out, weights, densities, config);
     rays
 }
 
@@ -710,26 +740,25 @@ fn point_kernel(p: Vec3, n: Vec3, ns: Vec3, x: Vec3) -> Option<f32> {
 ///
 /// Only receivers within [`BALANCE_FIELD`] of the source that take the analytic form are
 /// balanced (farther, the kernel is nearly flat over the source and the ratio nearly
-/// unbiased). `weights[k][j]` is sample `k`'s weight in density `j`; `uniform[j]`: density `j`
-/// is 1 everywhere, left alone; `cell(i)` gives the densities' cell `i` of their `side × side`
-/// grid over the square [`Tri::sample`] warps, row by row. `W` is the midpoint rule over those
-/// cells (a density is constant over a cell, so no step of it falls within one; the warp keeps
-/// areas, so each weighs alike): cell by cell around the kernel's peak (the source's point
-/// nearest the receiver, within one block of it), elsewhere three by three, a block weighing
-/// its cells' mean by the kernel at its middle (136 kernels for a 24 × 24 grid, not 576).
+/// unbiased). `weights[k][j]` is sample `k`'s weight in density `j` of `densities` (a uniform
+/// one is left alone). `W` is the midpoint rule over the densities' cells (a density is
+/// constant over a cell, so no step of it falls within one; [`Tri::sample`] keeps areas, so
+/// each weighs alike): cell by cell in the 2 × 2 blocks of [`BLOCK`]² cells nearest the
+/// kernel's peak (the source's point nearest the receiver), a block at a time elsewhere (its
+/// mean density by the kernel at its middle): 96 kernels for a 24 × 24 grid, not 576.
 /// Against a brute-force integral of the same density, a face at the foot of a dark strip
 /// (`a_face_at_the_foot_of_a_dark_strip_sees_the_density_as_it_lies`, tests/accuracy.rs) reads
-/// +1.9, +1.5, +1.2, -1.4% at heights 0.01, 0.05, 0.12, 0.25 of a unit patch, where the
+/// +1.9, +1.5, +1.4, -1.4% at heights 0.01, 0.05, 0.12, 0.25 of a unit patch, where the
 /// ratio over the samples read +304, +41, +5.3, +0.5%.
 fn balance_weights<const N: usize>(
     (p, n): (Vec3, Vec3),
     src: &Tri,
     samples: &[Vec3],
     weights: &mut [[f32; N]],
-    uniform: [bool; N],
-    (side, cell): (u32, impl Fn(usize) -> [f32; N]),
+    densities: &DensitySet<N>,
     config: &FormFactorConfig,
 ) {
+    let uniform = densities.uniform;
     let area = src.area();
     let d_min2 = (src.closest_point(p) - p).length_squared();
     if uniform.iter().all(|&u| u)
@@ -754,54 +783,44 @@ fn balance_weights<const N: usize>(
     // W: the kernel's mean of each density by the midpoint rule over the densities' cells
     // (each density is constant over a cell, so no step of it falls within a cell of the rule;
     // [`Tri::sample`] keeps areas, so every cell weighs alike). Away from the kernel's peak
-    // (the source's point nearest the receiver) the cells are taken `COARSE × COARSE` at a
-    // time, each block weighing its cells' mean density by the kernel at its middle.
-    const COARSE: u32 = 3;
-    let f = if side % COARSE == 0 { COARSE } else { 1 };
-    let (blocks, g) = (side / f, side as f32);
+    // (the source's point nearest the receiver) the cells are taken a block at a time, each
+    // block's mean density weighed by the kernel at its middle.
+    let (g, f) = (densities.g, densities.block);
+    let blocks = g / f;
     let (cu, cv) = square_point(src, src.closest_point(p));
-    let peak = |x: f32| ((x * blocks as f32) as i64).min(blocks as i64 - 1);
-    let (pu, pv) = (peak(cu), peak(cv));
-    let [v0, v1, v2] = src.v;
-    let b = v1 - v2;
-    let (nb, nsb, bb) = (n.dot(b), ns.dot(b), b.dot(b));
-    // The kernel at (u, v): the warped point is `a + t b` with `t = v √u`, so the cosines'
-    // numerators are linear in t and r² quadratic: k = (n·r)(−ns·r) / r⁴.
-    let kernel = |u: f32, v: f32| {
-        let su = u.sqrt();
-        let a = v0 * (1.0 - su) + v2 * su - p;
-        let t = v * su;
-        let (c1, c2) = (n.dot(a) + t * nb, -(ns.dot(a) + t * nsb));
-        let len2 = a.dot(a) + t * (2.0 * a.dot(b) + t * bb);
-        (c1 > 0.0 && c2 > 0.0).then(|| c1 * c2 / (len2 * len2).max(f32::MIN_POSITIVE))
+    // the two blocks (and so the cells) nearest the peak, in each direction
+    let around = |x: f32| {
+        let at = (x * blocks as f32 - 0.5)
+            .round()
+            .clamp(0.0, (blocks - 2) as f32) as u32;
+        at..at + 2
     };
-    let mid = |i: u32, cells: f32| (i as f32 + 0.5) / cells;
+    let (fine_u, fine_v) = if f > 1 && blocks >= 2 {
+        (around(cu), around(cv))
+    } else {
+        (0..0, 0..0)
+    };
+    let rows = Rows::new(p, n, ns, src);
+    let mid = |i: u32, cells: u32| (i as f32 + 0.5) / cells as f32;
     let (mut grid_k, mut grid_kw) = (0.0f32, [0.0f32; N]);
+    let mut add = |k: f32, d: [f32; N]| {
+        grid_k += k;
+        (0..N).for_each(|c| grid_kw[c] += k * d[c]);
+    };
+    let block_area = (f * f) as f32;
     for bi in 0..blocks {
-        for bj in 0..blocks {
-            let near = (bi as i64 - pu).abs() <= 1 && (bj as i64 - pv).abs() <= 1;
-            if near || f == 1 {
-                for i in bi * f..(bi + 1) * f {
-                    for j in bj * f..(bj + 1) * f {
-                        if let Some(k) = kernel(mid(i, g), mid(j, g)) {
-                            let d = cell((i * side + j) as usize);
-                            grid_k += k;
-                            (0..N).for_each(|c| grid_kw[c] += k * d[c]);
-                        }
-                    }
-                }
-            } else if let Some(k) = kernel(mid(bi, blocks as f32), mid(bj, blocks as f32)) {
-                let k = k * (f * f) as f32;
-                let mut mean = [0.0f32; N];
-                for i in bi * f..(bi + 1) * f {
-                    for j in bj * f..(bj + 1) * f {
-                        let d = cell((i * side + j) as usize);
-                        (0..N).for_each(|c| mean[c] += d[c]);
-                    }
-                }
-                grid_k += k;
-                (0..N).for_each(|c| grid_kw[c] += k * mean[c] / (f * f) as f32);
-            }
+        let row = rows.at(mid(bi, blocks));
+        for bj in (0..blocks).filter(|bj| !(fine_u.contains(&bi) && fine_v.contains(bj))) {
+            add(
+                block_area * row.kernel(mid(bj, blocks)),
+                densities.blocks[(bi * blocks + bj) as usize],
+            );
+        }
+    }
+    for i in fine_u.start * f..fine_u.end * f {
+        let row = rows.at(mid(i, g));
+        for j in fine_v.start * f..fine_v.end * f {
+            add(row.kernel(mid(j, g)), densities.cells[(i * g + j) as usize]);
         }
     }
     if grid_k <= 0.0 {
@@ -814,6 +833,83 @@ fn balance_weights<const N: usize>(
             weights.iter_mut().for_each(|w| w[j] *= scale);
         } else {
             weights.iter_mut().for_each(|w| w[j] = mean);
+        }
+    }
+}
+
+/// The point kernel `k = cos θ₁ cos θ₂ / r²` from a receiver over the square `(u, v)` that
+/// [`Tri::sample`] warps onto a source, a row (`u` fixed) at a time: along a row the warped
+/// point is `a + t b` with `t = v √u` and `b = v₁ − v₂`, so the cosines' numerators are linear
+/// in `t` and `r²` quadratic: `k = (n·r)(−ns·r) / r⁴`.
+struct Rows {
+    p: Vec3,
+    n: Vec3,
+    ns: Vec3,
+    v0: Vec3,
+    v2: Vec3,
+    b: Vec3,
+    /// `n·b`, `ns·b`, `b·b`
+    nb: f32,
+    nsb: f32,
+    bb: f32,
+}
+
+/// One row of [`Rows`]: `√u`, `n·a`, `ns·a`, `a·a`, `2 a·b`.
+struct Row<'r> {
+    rows: &'r Rows,
+    su: f32,
+    na: f32,
+    nsa: f32,
+    aa: f32,
+    ab2: f32,
+}
+
+impl Rows {
+    /// The kernel from the receiver `(p, n)` over `src` (of unit normal `ns`).
+    fn new(p: Vec3, n: Vec3, ns: Vec3, src: &Tri) -> Rows {
+        let [v0, v1, v2] = src.v;
+        let b = v1 - v2;
+        let (nb, nsb, bb) = (n.dot(b), ns.dot(b), b.dot(b));
+        Rows {
+            p,
+            n,
+            ns,
+            v0,
+            v2,
+            b,
+            nb,
+            nsb,
+            bb,
+        }
+    }
+
+    /// The row at `u`.
+    fn at(&self, u: f32) -> Row<'_> {
+        let su = u.sqrt();
+        let a = self.v0 * (1.0 - su) + self.v2 * su - self.p;
+        Row {
+            rows: self,
+            su,
+            na: self.n.dot(a),
+            nsa: self.ns.dot(a),
+            aa: a.dot(a),
+            ab2: 2.0 * a.dot(self.b),
+        }
+    }
+}
+
+impl Row<'_> {
+    /// The kernel at `v` (0 below the receiver's horizon or behind the source).
+    #[inline]
+    fn kernel(&self, v: f32) -> f32 {
+        let r = self.rows;
+        let t = v * self.su;
+        let (c1, c2) = (self.na + t * r.nb, -(self.nsa + t * r.nsb));
+        let len2 = self.aa + t * (self.ab2 + t * r.bb);
+        if c1 > 0.0 && c2 > 0.0 {
+            c1 * c2 / (len2 * len2).max(f32::MIN_POSITIVE)
+        } else {
+            0.0
         }
     }
 }

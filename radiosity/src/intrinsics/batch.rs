@@ -45,19 +45,19 @@ struct RaysOut<'a> {
 }
 
 /// The settings of a shot that every receiver of `RAD.RECEIVERS.RAYS` shares.
-struct Shot<'a> {
+struct Shot {
     tri: Tri,
     /// The source's normal (`tri.normal()`, once for every receiver).
     normal: Vec3,
     config: FormFactorConfig,
-    density: Densities<'a>,
+    density: Densities,
     seed: u64,
 }
 
 /// How `RAD.RECEIVERS.RAYS` weighs a shot's samples: by one density (none: uniform), or by the
 /// four of a shot whose channels shoot apart (the channels summed, then each channel's).
-enum Densities<'a> {
-    One(Option<SourceDensity<&'a [f32]>>),
+enum Densities {
+    One(Option<DensitySet<1>>),
     Sets(DensitySet<4>),
 }
 
@@ -65,15 +65,16 @@ enum Densities<'a> {
 /// the channels shoot apart: four of them, [`GRID_SET`] floats each).
 const GRID_SET: usize = (DENSITY_GRID * DENSITY_GRID) as usize + 1;
 
-impl<'a> Densities<'a> {
+impl Densities {
     /// The densities `grid` holds (empty: uniform; a density's cells; four grid sets), or
     /// `None` when it is none of those.
-    fn of(grid: &'a [f32]) -> Option<Densities<'a>> {
+    fn of(grid: &[f32]) -> Option<Densities> {
         if grid.is_empty() {
             return Some(Densities::One(None));
         }
         if grid.len() != 4 * GRID_SET {
-            return SourceDensity::from_cells(grid).map(|d| Densities::One(Some(d)));
+            let density = SourceDensity::from_cells(grid)?;
+            return Some(Densities::One(Some(DensitySet::new([Some(&density)]))));
         }
         let mut sets = [None, None, None, None];
         for (j, set) in sets.iter_mut().enumerate() {
@@ -208,6 +209,7 @@ pub unsafe extern "C" fn receivers_rays(
 /// taken (-1 when not even the first fits) and the rays cast.
 fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> (Word, Word) {
     let (mut samples, mut weights, mut sets) = (Vec::new(), Vec::new(), Vec::new());
+    let mut ones: Vec<[f32; 1]> = Vec::new();
     let weighted = !matches!(shot.density, Densities::One(None));
     // the weights' planes: one, or one a density of a set
     let plane = match shot.density {
@@ -234,18 +236,22 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
         let mut rng = Pcg32::new(seed, SAMPLE_STREAM);
         rng.leap(strides.of(set));
         match &shot.density {
-            Densities::One(density) => {
-                let density = density.as_ref();
+            Densities::One(None) => {
                 let (tri, config) = (&shot.tri, &shot.config);
+                let none = None::<&SourceDensity>;
                 receiver_samples(
                     (p, n),
                     tri,
                     config,
-                    density,
+                    none,
                     &mut rng,
                     &mut samples,
                     &mut weights,
                 );
+            }
+            Densities::One(Some(set)) => {
+                let (tri, config) = (&shot.tri, &shot.config);
+                receiver_samples_sets((p, n), tri, config, set, &mut rng, &mut samples, &mut ones);
             }
             Densities::Sets(set) => {
                 let (tri, config) = (&shot.tri, &shot.config);
@@ -261,7 +267,9 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
             out.samples[3 * (at + k)..3 * (at + k + 1)].copy_from_slice(&s.to_array());
         }
         match shot.density {
-            Densities::One(Some(_)) => out.weights[at..at + m].copy_from_slice(&weights[..m]),
+            Densities::One(Some(_)) => {
+                out.weights[at..at + m].copy_from_slice(&ones.as_flattened()[..m]);
+            }
             Densities::Sets(_) => {
                 for (k, w) in sets.iter().take(m).enumerate() {
                     for (j, w) in w.iter().enumerate() {
