@@ -157,6 +157,45 @@ impl SceneAnalysis {
     }
 }
 
+/// The triangles that can hide something: all but those lying in a face of the scene's
+/// bounding box and facing into it (the floor, walls and ceiling of a room that bounds the
+/// scene), unless some triangle in that face faces out.
+///
+/// A shadow ray runs between two points of the scene's surfaces, each lifted off its surface
+/// along that surface's normal; every such point lies in the box, and on the inner side of a
+/// face whose triangles all face in (a point in the face is lifted inward, one elsewhere is
+/// inside already). The segment between two points on the inner side of a plane meets the
+/// plane nowhere, so no triangle of that face can block it: testing them costs every ray and
+/// answers nothing (the Cornell box: 10 of its 32 triangles). `diagonal` is the box's; a
+/// triangle lies in a face when its corners are within 10⁻⁵ of it of the face.
+pub fn occluders(triangles: &[Tri], diagonal: f32) -> Vec<Tri> {
+    let eps = 1e-5 * diagonal.max(f32::MIN_POSITIVE);
+    let (lo, hi) = triangles.iter().flat_map(|t| t.v).fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), v| (lo.min(v), hi.max(v)),
+    );
+    // The face (axis, 0 = low side, 1 = high) a triangle lies in, and whether it faces in.
+    let face = |t: &Tri| -> Option<(usize, usize, bool)> {
+        let n = t.normal();
+        (0..3).find_map(|axis| {
+            let side = [lo[axis], hi[axis]]
+                .iter()
+                .position(|&b| t.v.iter().all(|v| (v[axis] - b).abs() <= eps))?;
+            let inward = if side == 0 { n[axis] } else { -n[axis] };
+            Some((axis, side, inward > 1.0 - 1e-4))
+        })
+    };
+    let mut mixed = [[false; 2]; 3];
+    for (axis, side, inward) in triangles.iter().filter_map(face) {
+        mixed[axis][side] |= !inward;
+    }
+    triangles
+        .iter()
+        .filter(|t| !face(t).is_some_and(|(axis, side, inward)| inward && !mixed[axis][side]))
+        .copied()
+        .collect()
+}
+
 /// Which patches the closure test counts as the surface.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Surface {
@@ -356,15 +395,20 @@ pub struct Stages {
     pub shadow_rays: bool,
     /// Scale each shot's form factors so that the receivers get all the power sent.
     pub close_rows: bool,
+    /// Triangles left out of the shadow-ray tests ([`occluders`]: they can hide nothing).
+    pub inert_triangles: usize,
 }
 
 impl Stages {
     /// The stages `analysis` calls for; `all_stages` keeps the shadow rays whatever the scene.
     /// Row closing is a correction, not a saving, so it follows the analysis either way.
-    pub fn for_scene(analysis: &SceneAnalysis, all_stages: bool) -> Stages {
+    /// `inert_triangles` is how many triangles [`occluders`] left out (none are with
+    /// `all_stages`: the caller tests them all).
+    pub fn for_scene(analysis: &SceneAnalysis, all_stages: bool, inert_triangles: usize) -> Stages {
         Stages {
             shadow_rays: all_stages || !analysis.convex,
             close_rows: analysis.closed,
+            inert_triangles: if all_stages { 0 } else { inert_triangles },
         }
     }
 
@@ -377,6 +421,12 @@ impl Stages {
                  lies on the hull), so no surface can hide another"
                     .to_string(),
             );
+        } else if self.inert_triangles > 0 {
+            out.push(format!(
+                "shadow-ray tests against {} triangles: they lie in faces of the scene's \
+                 bounding box and face into it, so they can hide nothing",
+                self.inert_triangles
+            ));
         }
         out
     }
@@ -534,7 +584,7 @@ mod tests {
         assert!(tris.last().unwrap().normal().y < 0.0);
         let a = analyse(&tris, 1.7);
         assert!(!a.convex && a.closed && a.sheets == 1, "{a:?}");
-        let stages = Stages::for_scene(&a, false);
+        let stages = Stages::for_scene(&a, false, 0);
         assert!(stages.shadow_rays && stages.left_out().is_empty() && stages.close_rows);
         // A block standing in the air: no sheet, still closed.
         let mut tris = cube(1.0, false);
@@ -656,8 +706,8 @@ mod tests {
     #[test]
     fn all_stages_keeps_the_shadow_rays() {
         let a = analyse(&cube(1.0, false), 1.7);
-        assert!(!Stages::for_scene(&a, false).shadow_rays);
-        assert!(Stages::for_scene(&a, true).shadow_rays);
-        assert_eq!(Stages::for_scene(&a, false).left_out().len(), 1);
+        assert!(!Stages::for_scene(&a, false, 0).shadow_rays);
+        assert!(Stages::for_scene(&a, true, 0).shadow_rays);
+        assert_eq!(Stages::for_scene(&a, false, 0).left_out().len(), 1);
     }
 }

@@ -190,6 +190,11 @@ pub struct SolverConfig {
     /// How an element's received power is taken from its corners' form factors, and an
     /// object's mean from its vertices' irradiance ([`MeanRule`]).
     pub element_means: MeanRule,
+    /// Leave the triangles that can hide nothing out of the octree the shadow rays are tested
+    /// against ([`crate::analysis::occluders`]: those in faces of the scene's box that face
+    /// into it); false: every triangle, as carm.occ's octree holds them (its voxels carry the
+    /// scene's geometry as the paper distributes it). `all_stages` keeps them too.
+    pub inert_faces: bool,
 }
 
 impl Default for SolverConfig {
@@ -208,6 +213,7 @@ impl Default for SolverConfig {
             octree: OctreeConfig::default(),
             channel_densities: true,
             element_means: MeanRule::Quadratic,
+            inert_faces: true,
         }
     }
 }
@@ -339,7 +345,11 @@ impl<'a> Solver<'a> {
     /// Prepares a solve: builds the octree and books the emitted power as unshot.
     pub fn new(scene: &'a Scene, mesh: Mesh, config: SolverConfig) -> Solver<'a> {
         let tris: Vec<_> = scene.triangles.iter().map(|t| t.tri).collect();
-        let octree = Octree::build(&tris, config.octree);
+        let occluders = match config.inert_faces && !config.all_stages {
+            true => analysis::occluders(&tris, scene.diagonal()),
+            false => tris.clone(),
+        };
+        let octree = Octree::build(&occluders, config.octree);
         let patch_area: Vec<f64> = mesh.patches.iter().map(|t| t.area() as f64).collect();
         let element_area = mesh
             .elements
@@ -378,7 +388,7 @@ impl<'a> Solver<'a> {
             .collect();
         Solver {
             analysis,
-            stages: Stages::for_scene(&analysis, config.all_stages),
+            stages: Stages::for_scene(&analysis, config.all_stages, tris.len() - occluders.len()),
             scene,
             irradiance: vec![Vec3::ZERO; mesh.vertices.len()],
             mesh,
