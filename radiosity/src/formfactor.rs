@@ -759,7 +759,15 @@ fn balance_weights<const N: usize>(
     config: &FormFactorConfig,
 ) {
     let uniform = densities.uniform;
-    let area = src.area();
+    if uniform.iter().all(|&u| u) || samples.is_empty() {
+        return;
+    }
+    // (the distance to the source's plane bounds the distance to the source from below)
+    let (area, ns) = (src.area(), src.normal());
+    let plane = ns.dot(p - src.v[0]);
+    if plane * plane >= BALANCE_FIELD * BALANCE_FIELD * area {
+        return;
+    }
     let d_min2 = (src.closest_point(p) - p).length_squared();
     if uniform.iter().all(|&u| u)
         || samples.is_empty()
@@ -769,7 +777,6 @@ fn balance_weights<const N: usize>(
     {
         return;
     }
-    let ns = src.normal();
     let (mut k_sum, mut kw_sum) = (0.0f32, [0.0f32; N]);
     for (&x, w) in samples.iter().zip(weights.iter()) {
         if let Some(k) = point_kernel(p, n, ns, x) {
