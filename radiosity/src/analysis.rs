@@ -166,7 +166,7 @@ impl SceneAnalysis {
 /// face whose triangles all face in (a point in the face is lifted inward, one elsewhere is
 /// inside already). The segment between two points on the inner side of a plane meets the
 /// plane nowhere, so no triangle of that face can block it: testing them costs every ray and
-/// answers nothing (the Cornell box: 10 of its 32 triangles). `diagonal` is the box's; a
+/// answers nothing (the Cornell box: 8 of its 32 triangles). `diagonal` is the box's; a
 /// triangle lies in a face when its corners are within 10⁻⁵ of it of the face.
 pub fn occluders(triangles: &[Tri], diagonal: f32) -> Vec<Tri> {
     let eps = 1e-5 * diagonal.max(f32::MIN_POSITIVE);
@@ -185,14 +185,14 @@ pub fn occluders(triangles: &[Tri], diagonal: f32) -> Vec<Tri> {
             Some((axis, side, inward > 1.0 - 1e-4))
         })
     };
+    let faces: Vec<_> = triangles.iter().map(face).collect();
     let mut mixed = [[false; 2]; 3];
-    for (axis, side, inward) in triangles.iter().filter_map(face) {
+    for &(axis, side, inward) in faces.iter().flatten() {
         mixed[axis][side] |= !inward;
     }
-    triangles
-        .iter()
-        .filter(|t| !face(t).is_some_and(|(axis, side, inward)| inward && !mixed[axis][side]))
-        .copied()
+    (triangles.iter().zip(&faces))
+        .filter(|(_, f)| !f.is_some_and(|(axis, side, inward)| inward && !mixed[axis][side]))
+        .map(|(t, _)| *t)
         .collect()
 }
 
@@ -402,13 +402,13 @@ pub struct Stages {
 impl Stages {
     /// The stages `analysis` calls for; `all_stages` keeps the shadow rays whatever the scene.
     /// Row closing is a correction, not a saving, so it follows the analysis either way.
-    /// `inert_triangles` is how many triangles [`occluders`] left out (none are with
-    /// `all_stages`: the caller tests them all).
+    /// `inert_triangles` is how many triangles the shadow rays' octree left out ([`occluders`];
+    /// none with `all_stages`).
     pub fn for_scene(analysis: &SceneAnalysis, all_stages: bool, inert_triangles: usize) -> Stages {
         Stages {
             shadow_rays: all_stages || !analysis.convex,
             close_rows: analysis.closed,
-            inert_triangles: if all_stages { 0 } else { inert_triangles },
+            inert_triangles,
         }
     }
 

@@ -736,7 +736,6 @@ fn point_kernel(p: Vec3, n: Vec3, ns: Vec3, x: Vec3) -> Option<f32> {
 /// source: the form factor becomes the exact one
 /// times `W` times the weighted kernel's visible share `Σ_vis k w / Σ k w` (exactly `W` when
 /// nothing is occluded). Where no sample above the horizon has weight, each weighs `W`.
-/// `W` is taken over the densities' `side × side` cells (`cell(i)`: cell `i`, row by row).
 ///
 /// Only receivers within [`BALANCE_FIELD`] of the source that take the analytic form are
 /// balanced (farther, the kernel is nearly flat over the source and the ratio nearly
@@ -768,10 +767,9 @@ fn balance_weights<const N: usize>(
     if plane * plane >= BALANCE_FIELD * BALANCE_FIELD * area {
         return;
     }
-    let d_min2 = (src.closest_point(p) - p).length_squared();
-    if uniform.iter().all(|&u| u)
-        || samples.is_empty()
-        || weights.len() != samples.len()
+    let nearest = src.closest_point(p);
+    let d_min2 = (nearest - p).length_squared();
+    if weights.len() != samples.len()
         || d_min2 >= BALANCE_FIELD * BALANCE_FIELD * area
         || !is_analytic(area, samples.len(), d_min2, config)
     {
@@ -794,7 +792,7 @@ fn balance_weights<const N: usize>(
     // block's mean density weighed by the kernel at its middle.
     let (g, f) = (densities.g, densities.block);
     let blocks = g / f;
-    let (cu, cv) = square_point(src, src.closest_point(p));
+    let (cu, cv) = square_point(src, nearest);
     // the two blocks (and so the cells) nearest the peak, in each direction
     let around = |x: f32| {
         let at = (x * blocks as f32 - 0.5)
