@@ -560,7 +560,8 @@ struct Dealt {
 /// The controller's dealing of the mesh's sample points, in order: each to its hash's node
 /// (`owner`), unless that node is full (`node_points` points, or `node_corners` corners with
 /// the point's); then to a re-hash's, and after as many re-hashes as nodes, to the next node
-/// with room. `None` when no node has room for some point.
+/// with room (never the root when there are others). `None` when no node has room for some
+/// point.
 fn deal(mesh: &Mesh, nodes: usize, node_points: usize, node_corners: usize) -> Option<Dealt> {
     let mut points = vec![0usize; nodes];
     let mut dealt = Dealt {
@@ -580,6 +581,9 @@ fn deal(mesh: &Mesh, nodes: usize, node_points: usize, node_corners: usize) -> O
                 at = owner(pn, nodes, attempt);
             } else if attempt < 2 * nodes {
                 at = (at + 1) % nodes;
+                if at == 0 && nodes > 1 {
+                    at = 1;
+                }
             } else {
                 return None;
             }
