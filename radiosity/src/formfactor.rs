@@ -127,8 +127,21 @@ pub fn source_samples_weighted<C: AsRef<[f32]>>(
     out: &mut Vec<Vec3>,
     weights: &mut Vec<f32>,
 ) {
+    let whole = Part::whole(src);
+    part_samples_weighted(&whole, m, density, rng, out, weights);
+}
+
+/// [`source_samples_weighted`] over a part of the source ([`Part`]).
+fn part_samples_weighted<C: AsRef<[f32]>>(
+    part: &Part,
+    m: u32,
+    density: Option<&SourceDensity<C>>,
+    rng: &mut Pcg32,
+    out: &mut Vec<Vec3>,
+    weights: &mut Vec<f32>,
+) {
     weights.clear();
-    stratified_samples(src, m, rng, out, |u, v| {
+    stratified_samples(part, m, rng, out, |u, v| {
         if let Some(d) = density {
             weights.push(d.at(u, v));
         }
@@ -146,14 +159,27 @@ pub fn source_samples_sets<const N: usize>(
     out: &mut Vec<Vec3>,
     weights: &mut Vec<[f32; N]>,
 ) {
-    weights.clear();
-    stratified_samples(src, m, rng, out, |u, v| weights.push(densities.at(u, v)));
+    part_samples_sets(&Part::whole(src), m, densities, rng, out, weights);
 }
 
-/// The jittered `k × k` grid of [`source_samples`] into `out`, calling `at(u, v)` with each
-/// sample's place in the square [`Tri::sample`] warps.
+/// [`source_samples_sets`] over a part of the source ([`Part`]).
+fn part_samples_sets<const N: usize>(
+    part: &Part,
+    m: u32,
+    densities: &DensitySet<N>,
+    rng: &mut Pcg32,
+    out: &mut Vec<Vec3>,
+    weights: &mut Vec<[f32; N]>,
+) {
+    weights.clear();
+    stratified_samples(part, m, rng, out, |u, v| weights.push(densities.at(u, v)));
+}
+
+/// The jittered `k × k` grid of [`source_samples`] into `out`, over `part` of a source, calling
+/// `at(u, v)` with each sample's place in the square [`Tri::sample`] warps onto the whole
+/// source (where its densities are looked up).
 fn stratified_samples(
-    src: &Tri,
+    part: &Part,
     m: u32,
     rng: &mut Pcg32,
     out: &mut Vec<Vec3>,
@@ -165,9 +191,90 @@ fn stratified_samples(
         for j in 0..k {
             let u = (i as f32 + rng.next_f32()) / k as f32;
             let v = (j as f32 + rng.next_f32()) / k as f32;
-            out.push(src.sample(u, v));
-            at(u, v);
+            match part {
+                Part::Whole(src) => {
+                    out.push(src.sample(u, v));
+                    at(u, v);
+                }
+                Part::Fan { src, fan, upto } => {
+                    // u picks a triangle of the fan by area, then places the sample in it
+                    let t = upto.iter().position(|&c| u < c).unwrap_or(fan.len() - 1);
+                    let start = if t == 0 { 0.0 } else { upto[t - 1] };
+                    let share = upto[t] - start;
+                    let u = if share > 0.0 {
+                        ((u - start) / share).clamp(0.0, 1.0)
+                    } else {
+                        0.5
+                    };
+                    let x = fan[t].sample(u, v);
+                    out.push(x);
+                    let (su, sv) = square_point(src, x);
+                    at(su, sv);
+                }
+            }
         }
+    }
+}
+
+/// The part of a source a receiver draws its samples from ([`receiver_samples`]).
+enum Part<'t> {
+    /// All of it.
+    Whole(&'t Tri),
+    /// The part above the receiver's horizon, a fan of triangles with the running share of
+    /// their areas (`upto[i]`: that of triangles `0..=i`, the last 1).
+    Fan {
+        src: &'t Tri,
+        fan: Vec<Tri>,
+        upto: Vec<f32>,
+    },
+}
+
+impl<'t> Part<'t> {
+    fn whole(src: &'t Tri) -> Part<'t> {
+        Part::Whole(src)
+    }
+
+    /// The part of `src` that the receiver `(p, n)`, drawing `m` samples, draws them from: where
+    /// the source reaches below the receiver's horizon and the receiver takes the analytic form
+    /// (exact over the part above it, times the visible share of the samples), only the part
+    /// above. Samples below the horizon count for nothing there, and a receiver at a contact
+    /// line or a concave corner (a table leg under the table top, a block's face at the floor)
+    /// may see only a thin strip of a large source: drawn from all of it, few or none of its
+    /// samples fall in the strip, and with none the visible share is taken as 0 (a leg's top
+    /// read 27% low where the underside hangs over it, radiosity/REFERENCES.md).
+    fn of(p: Vec3, n: Vec3, src: &'t Tri, m: u32, config: &FormFactorConfig) -> Part<'t> {
+        if src.v.iter().all(|v| n.dot(*v - p) > 0.0) {
+            return Part::Whole(src);
+        }
+        let k = sample_grid(m);
+        let d_min2 = (src.closest_point(p) - p).length_squared();
+        if !is_analytic(src.area(), (k * k) as usize, d_min2, config) {
+            return Part::Whole(src);
+        }
+        let poly = clip_polygon(&src.v, p, n);
+        if poly.len() < 3 {
+            return Part::Whole(src);
+        }
+        let fan: Vec<Tri> = (1..poly.len() - 1)
+            .map(|i| Tri {
+                v: [poly[0], poly[i], poly[i + 1]],
+            })
+            .collect();
+        let areas: Vec<f32> = fan.iter().map(Tri::area).collect();
+        let total: f32 = areas.iter().sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return Part::Whole(src);
+        }
+        let mut sum = 0.0;
+        let mut upto: Vec<f32> = areas
+            .iter()
+            .map(|a| {
+                sum += a / total;
+                sum
+            })
+            .collect();
+        *upto.last_mut().expect("a fan has a triangle") = 1.0;
+        Part::Fan { src, fan, upto }
     }
 }
 
@@ -455,7 +562,8 @@ pub fn receiver_samples<C: AsRef<[f32]>>(
 ) -> u32 {
     weights.clear();
     let rays = receiver_slot(receiver, src, config, rng, out, |rays, rng, out| {
-        source_samples_weighted(src, rays, density, rng, out, weights)
+        let part = Part::of(receiver.0, receiver.1, src, rays, config);
+        part_samples_weighted(&part, rays, density, rng, out, weights)
     });
     if let Some(d) = density {
         let (planes, _) = weights.as_chunks_mut::<1>();
@@ -484,7 +592,8 @@ pub fn receiver_samples_sets<const N: usize>(
 ) -> u32 {
     weights.clear();
     let rays = receiver_slot(receiver, src, config, rng, out, |rays, rng, out| {
-        source_samples_sets(src, rays, densities, rng, out, weights)
+        let part = Part::of(receiver.0, receiver.1, src, rays, config);
+        part_samples_sets(&part, rays, densities, rng, out, weights)
     });
     balance_weights(receiver, src, out, weights, densities, config);
     rays
