@@ -23,6 +23,7 @@
 //! No step makes an edge shorter than the weld distance (1e-5 of the scene's diagonal), and
 //! bisection never goes below ten times it, so meshing always finishes.
 
+mod band;
 mod cuts;
 mod input;
 mod piece;
@@ -146,6 +147,9 @@ pub struct MeshStats {
     pub elements: usize,
     /// Sample points (vertices).
     pub vertices: usize,
+    /// Sample points added by the band along concave creases and contact lines
+    /// ([`Mesh::band_concave_creases`]; included in `vertices`).
+    pub crease_band_points: usize,
 }
 
 /// The elements around each edge, by [`edge_key`].

@@ -146,6 +146,11 @@ pub struct Args {
     /// Longest element edge; default: scene diagonal / 20.
     #[arg(long)]
     pub element_size: Option<f32>,
+    /// Leave out the row of sample points that halves the edges leaving concave creases and
+    /// contact lines, where surfaces meet face to face (radiosity/REFERENCES.md, "A row of
+    /// points beside concave creases")
+    #[arg(long)]
+    pub no_crease_band: bool,
     /// Turn adaptive subdivision off.
     #[arg(long)]
     pub no_adapt: bool,
@@ -292,7 +297,10 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
             mesh_config.element_size
         ),
     );
-    let mesh = Mesh::from_scene(&scene, mesh_config);
+    let mut mesh = Mesh::from_scene(&scene, mesh_config);
+    if !args.no_crease_band {
+        mesh.band_concave_creases(mesh_config.element_size / 2.0);
+    }
     anyhow::ensure!(
         mesh.stats.elements <= args.max_elements,
         "{name}: meshing made {} elements, more than --max-elements {} (discontinuity cuts add \

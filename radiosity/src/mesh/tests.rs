@@ -486,3 +486,67 @@ fn vertex_normals_decide_which_way_a_surface_faces() {
     assert_eq!(mesh.stats.input.reoriented, 2);
     assert!(mesh.elements.iter().all(|e| mesh.tri(e).normal().y > 0.0));
 }
+
+#[test]
+fn the_band_takes_the_elements_along_a_box_s_base_and_not_along_its_convex_edges() {
+    let scene = box_on_floor();
+    let mut mesh = meshed(&scene, 1.0);
+    let marked = mesh.at_concave_crease();
+    let near_base = |e: &Element| {
+        let t = mesh.tri(e);
+        let touches = |p: Vec3| {
+            let on_side = (p.x - 4.0).abs() < 1e-4
+                || (p.x - 6.0).abs() < 1e-4
+                || (p.z - 4.0).abs() < 1e-4
+                || (p.z - 6.0).abs() < 1e-4;
+            let within = (4.0..=6.0).contains(&p.x) && (4.0..=6.0).contains(&p.z);
+            p.y == 0.0 && on_side && within
+        };
+        t.v.iter().any(|&p| touches(p))
+    };
+    let shown = |e: &Element| e.v.iter().all(|&v| !mesh.vertices[v as usize].hidden());
+    let (mut walls, mut floor) = (0, 0);
+    for (e, &m) in mesh.elements.iter().zip(&marked) {
+        match e.object {
+            // the box's top meets its walls at convex edges only
+            2 => assert!(!m, "a top element is marked"),
+            // a wall is marked along its foot (its top edge is convex)
+            1 => {
+                assert_eq!(
+                    m,
+                    near_base(e),
+                    "wall element at {}",
+                    mesh.tri(e).centroid()
+                );
+                walls += m as usize;
+            }
+            // the floor is marked beside the base, never in the footprint
+            _ => {
+                assert_eq!(
+                    m,
+                    near_base(e) && shown(e),
+                    "floor element at {}",
+                    mesh.tri(e).centroid()
+                );
+                floor += m as usize;
+            }
+        }
+    }
+    assert!(walls >= 8 && floor >= 8, "walls {walls}, floor {floor}");
+    // Banding halves the long edges that leave the base line from the marked elements.
+    let before = mesh.vertices.len();
+    let added = mesh.band_concave_creases(0.5);
+    assert_eq!(mesh.vertices.len(), before + added);
+    assert_eq!(mesh.stats.crease_band_points, added);
+    assert!(added > 0);
+    // (each new point halves an edge from the line: within an element of it, and off it)
+    for v in &mesh.vertices[before..] {
+        let p = v.pos;
+        let near = p.y <= 1.0 && (3.0..=7.0).contains(&p.x) && (3.0..=7.0).contains(&p.z);
+        assert!(near, "a band point far from the base line: {p:?}");
+        let on_line = p.y == 0.0
+            && ((p.x == 4.0 || p.x == 6.0) && (4.0..=6.0).contains(&p.z)
+                || (p.z == 4.0 || p.z == 6.0) && (4.0..=6.0).contains(&p.x));
+        assert!(!on_line, "a band point on the base line: {p:?}");
+    }
+}
