@@ -240,8 +240,9 @@ impl<'t> Part<'t> {
     /// above. Samples below the horizon count for nothing there, and a receiver at a contact
     /// line or a concave corner (a table leg under the table top, a block's face at the floor)
     /// may see only a thin strip of a large source: drawn from all of it, few or none of its
-    /// samples fall in the strip, and with none the visible share is taken as 0 (a leg's top
-    /// read 27% low where the underside hangs over it, radiosity/REFERENCES.md).
+    /// samples fall in the strip, and with none the visible share is taken as 0 (a leg's face
+    /// under the table top's 5 cm overhang got 0 for 0.49 on most seeds; radiosity/
+    /// REFERENCES.md, "A row of points beside concave creases").
     fn of(p: Vec3, n: Vec3, src: &'t Tri, m: u32, config: &FormFactorConfig) -> Part<'t> {
         if src.v.iter().all(|v| n.dot(*v - p) > 0.0) {
             return Part::Whole(src);
