@@ -196,17 +196,14 @@ fn stratified_samples(
                     out.push(src.sample(u, v));
                     at(u, v);
                 }
-                Part::Fan { src, fan, upto } => {
+                Part::Fan { src, fan, first } => {
                     // u picks a triangle of the fan by area, then places the sample in it
-                    let t = upto.iter().position(|&c| u < c).unwrap_or(fan.len() - 1);
-                    let start = if t == 0 { 0.0 } else { upto[t - 1] };
-                    let share = upto[t] - start;
-                    let u = if share > 0.0 {
-                        ((u - start) / share).clamp(0.0, 1.0)
+                    let x = if u < *first {
+                        fan[0].sample((u / first).min(1.0), v)
                     } else {
-                        0.5
+                        let u = ((u - first) / (1.0 - first)).clamp(0.0, 1.0);
+                        fan[1].sample(u, v)
                     };
-                    let x = fan[t].sample(u, v);
                     out.push(x);
                     let (su, sv) = square_point(src, x);
                     at(su, sv);
@@ -220,12 +217,13 @@ fn stratified_samples(
 enum Part<'t> {
     /// All of it.
     Whole(&'t Tri),
-    /// The part above the receiver's horizon, a fan of triangles with the running share of
-    /// their areas (`upto[i]`: that of triangles `0..=i`, the last 1).
+    /// The part above the receiver's horizon: a triangle clipped by a plane has three or four
+    /// corners, so a fan of one or two triangles, the first taking the share `first` of the
+    /// part's area.
     Fan {
         src: &'t Tri,
-        fan: Vec<Tri>,
-        upto: Vec<f32>,
+        fan: [Tri; 2],
+        first: f32,
     },
 }
 
@@ -244,7 +242,8 @@ impl<'t> Part<'t> {
     /// under the table top's 5 cm overhang got 0 for 0.49 on most seeds; radiosity/
     /// REFERENCES.md, "A row of points beside concave creases").
     fn of(p: Vec3, n: Vec3, src: &'t Tri, m: u32, config: &FormFactorConfig) -> Part<'t> {
-        if src.v.iter().all(|v| n.dot(*v - p) > 0.0) {
+        let height = src.v.map(|v| n.dot(v - p));
+        if height.iter().all(|&h| h > 0.0) {
             return Part::Whole(src);
         }
         let k = sample_grid(m);
@@ -252,30 +251,36 @@ impl<'t> Part<'t> {
         if !is_analytic(src.area(), (k * k) as usize, d_min2, config) {
             return Part::Whole(src);
         }
-        let poly = clip_polygon(&src.v, p, n);
-        if poly.len() < 3 {
+        // the corners above the horizon and where the edges cross it, in order (as
+        // `clip_polygon` keeps them)
+        let (mut poly, mut count) = ([Vec3::ZERO; 4], 0);
+        for i in 0..3 {
+            let j = (i + 1) % 3;
+            let (a, b, ha, hb) = (src.v[i], src.v[j], height[i], height[j]);
+            if ha >= 0.0 {
+                poly[count] = a;
+                count += 1;
+            }
+            if (ha >= 0.0) != (hb >= 0.0) && count < 4 {
+                poly[count] = a + (b - a) * (ha / (ha - hb));
+                count += 1;
+            }
+        }
+        let fan = [
+            Tri {
+                v: [poly[0], poly[1], poly[2]],
+            },
+            Tri {
+                v: [poly[0], poly[2], poly[3]],
+            },
+        ];
+        let areas = [fan[0].area(), if count == 4 { fan[1].area() } else { 0.0 }];
+        let total = areas[0] + areas[1];
+        if count < 3 || !(total > 0.0 && total.is_finite()) {
             return Part::Whole(src);
         }
-        let fan: Vec<Tri> = (1..poly.len() - 1)
-            .map(|i| Tri {
-                v: [poly[0], poly[i], poly[i + 1]],
-            })
-            .collect();
-        let areas: Vec<f32> = fan.iter().map(Tri::area).collect();
-        let total: f32 = areas.iter().sum();
-        if !(total > 0.0 && total.is_finite()) {
-            return Part::Whole(src);
-        }
-        let mut sum = 0.0;
-        let mut upto: Vec<f32> = areas
-            .iter()
-            .map(|a| {
-                sum += a / total;
-                sum
-            })
-            .collect();
-        *upto.last_mut().expect("a fan has a triangle") = 1.0;
-        Part::Fan { src, fan, upto }
+        let first = if count == 4 { areas[0] / total } else { 1.0 };
+        Part::Fan { src, fan, first }
     }
 }
 
