@@ -4,7 +4,9 @@
 //!
 //! The power still unshot is assumed to land evenly (the ambient irradiance, Cohen et al. 1988,
 //! corrected for open scenes); each object's estimated relative error is that ambient term's
-//! share of its mean radiosity.
+//! share of its mean radiosity. That holds for power held by patches that have shot; a patch
+//! that never has gives its power to its neighbours, so both solvers shoot every such patch
+//! once before they stop on this rule ([`crate::solver::Solver::run`]).
 
 use glam::{DVec3, Vec3};
 
