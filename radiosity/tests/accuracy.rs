@@ -10,7 +10,7 @@ use occ_radiosity::geom::Tri;
 use occ_radiosity::kernels::{
     SamplePoint, shoot_batch, shoot_batch_visibility, shoot_batch_weighted,
 };
-use occ_radiosity::mesh::{Mesh, MeshConfig};
+use occ_radiosity::mesh::{CREASE_BAND_EDGE, Mesh, MeshConfig};
 use occ_radiosity::octree::{Octree, OctreeConfig};
 use occ_radiosity::output::truth::Reference;
 use occ_radiosity::pathtrace::{PathTraceConfig, PathTracer};
@@ -488,22 +488,20 @@ fn the_path_tracer_reproduces_its_stored_cornell_reference() {
 
 #[test]
 fn cornell_surfaces_are_within_one_percent_of_the_path_tracer_at_the_defaults() {
-    // The command's defaults (patches diagonal / 4, elements diagonal / 20, adaptive
-    // subdivision, 8 rays, error=0.01). The large surfaces and the block tops must be within 1%
-    // of the path-traced reference per channel, plus 3 of its standard errors (0.1-0.4% here).
-    // Not asserted: the block sides, whose means still move by up to 2.5 points from seed to
-    // seed at the defaults (the few rays of weak shots; REFERENCES.md).
+    // The command's defaults (`MeshConfig::default_for` with its row of points, adaptive
+    // subdivision, 8 rays, error=0.01). Every surface must be within 1% of the path-traced
+    // reference per channel (2% where the channel is below a tenth of the scene's area-weighted
+    // mean, the light included: the dim block faces), plus 3 of its standard errors (0.1-0.4%
+    // here). Seeds 1-11 of the command hold this (radiosity/REFERENCES.md); before the row of
+    // points and the samples in the part a receiver sees, the short block's red side was out
+    // on three of them.
     let reference = cornell_reference();
     let scene = scene::cornell::load(true).expect("cornell");
     let diag = scene.diagonal();
-    let element_size = diag / 20.0;
-    let mesh = Mesh::from_scene(
-        &scene,
-        MeshConfig {
-            patch_size: diag / 4.0,
-            element_size,
-        },
-    );
+    let sizes = MeshConfig::default_for(diag);
+    let element_size = sizes.element_size;
+    let mut mesh = Mesh::from_scene(&scene, sizes);
+    mesh.band_concave_creases(element_size * CREASE_BAND_EDGE);
     let config = SolverConfig {
         form_factor: FormFactorConfig {
             rays: 8,
@@ -523,22 +521,25 @@ fn cornell_surfaces_are_within_one_percent_of_the_path_tracer_at_the_defaults() 
     };
     let mut solver = Solver::new(&scene, mesh, config);
     solver.run(|_, _| {});
-    let large = [
-        "floor",
-        "ceiling",
-        "back_wall",
-        "green_wall",
-        "red_wall",
-        "short_block_top",
-        "tall_block_top",
-    ];
+    let total: f64 = reference.objects.iter().map(|o| o.area).sum();
+    let mean: [f64; 3] = std::array::from_fn(|c| {
+        (reference.objects.iter())
+            .map(|o| o.area * o.mean_b[c])
+            .sum::<f64>()
+            / total
+    });
     for (o, (_, b)) in scene.objects.iter().zip(solver.object_means()) {
-        if !large.contains(&o.name.as_str()) {
+        if o.emission != Vec3::ZERO {
             continue;
         }
         let r = reference.object(&o.name).expect("object in the reference");
         for c in 0..3 {
-            let tolerance = 0.01 * r.mean_b[c] + 3.0 * r.std_err[c];
+            let share = if r.mean_b[c] < 0.1 * mean[c] {
+                0.02
+            } else {
+                0.01
+            };
+            let tolerance = share * r.mean_b[c] + 3.0 * r.std_err[c];
             assert!(
                 (b[c] - r.mean_b[c]).abs() <= tolerance,
                 "{} channel {c}: solver {} against path-traced {} ± {}",

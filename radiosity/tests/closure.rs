@@ -17,16 +17,9 @@ fn load(name: &str, mtl: &str) -> Scene {
     scene::load_obj(name, &obj, &|_| Ok(mtl.clone())).expect("scene")
 }
 
-/// The scene meshed at the default sizes (patches diagonal / 4, elements diagonal / 20).
+/// The scene meshed at the command's default sizes ([`MeshConfig::default_for`]).
 fn mesh(scene: &Scene) -> Mesh {
-    let d = scene.diagonal();
-    Mesh::from_scene(
-        scene,
-        MeshConfig {
-            patch_size: d / 4.0,
-            element_size: d / 20.0,
-        },
-    )
+    Mesh::from_scene(scene, MeshConfig::default_for(scene.diagonal()))
 }
 
 /// The analysis and the names of the objects whose patches are sheets.

@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use occ_radiosity::formfactor::FormFactorConfig;
-use occ_radiosity::mesh::{Mesh, MeshConfig};
+use occ_radiosity::mesh::{CREASE_BAND_EDGE, Mesh, MeshConfig};
 use occ_radiosity::octree::OctreeConfig;
 use occ_radiosity::output::compare;
 use occ_radiosity::output::{image, plot, ply, probe, report, truth};
@@ -143,7 +143,7 @@ pub struct Args {
     /// Longest patch (shooter) edge; default: scene diagonal / 4.
     #[arg(long)]
     pub patch_size: Option<f32>,
-    /// Longest element edge; default: scene diagonal / 20.
+    /// Longest element edge; default: scene diagonal / 19.
     #[arg(long)]
     pub element_size: Option<f32>,
     /// Leave out the row of sample points that halves the edges leaving concave creases and
@@ -299,7 +299,7 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     );
     let mut mesh = Mesh::from_scene(&scene, mesh_config);
     if !args.no_crease_band {
-        mesh.band_concave_creases(mesh_config.element_size / 2.0);
+        mesh.band_concave_creases(mesh_config.element_size * CREASE_BAND_EDGE);
     }
     anyhow::ensure!(
         mesh.stats.elements <= args.max_elements,
@@ -432,13 +432,14 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The meshing sizes: given, or defaults (patches diagonal / 4, elements diagonal / 20)
+/// The meshing sizes: given, or defaults ([`MeshConfig::default_for`])
 /// coarsened until the element estimate fits --max-elements. Given sizes over it are refused.
 fn mesh_config(args: &Args, name: &str, scene: &Scene) -> anyhow::Result<MeshConfig> {
     let diag = scene.diagonal();
+    let default = MeshConfig::default_for(diag);
     let config = MeshConfig {
-        patch_size: args.patch_size.unwrap_or(diag / 4.0),
-        element_size: args.element_size.unwrap_or(diag / 20.0),
+        patch_size: args.patch_size.unwrap_or(default.patch_size),
+        element_size: args.element_size.unwrap_or(default.element_size),
     };
     let budget = args.max_elements as f64;
     let estimate = config.estimated_elements(scene);
