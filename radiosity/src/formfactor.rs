@@ -127,8 +127,7 @@ pub fn source_samples_weighted<C: AsRef<[f32]>>(
     out: &mut Vec<Vec3>,
     weights: &mut Vec<f32>,
 ) {
-    let whole = Part::whole(src);
-    part_samples_weighted(&whole, m, density, rng, out, weights);
+    part_samples_weighted(&Part::Whole(src), m, density, rng, out, weights);
 }
 
 /// [`source_samples_weighted`] over a part of the source ([`Part`]).
@@ -159,7 +158,7 @@ pub fn source_samples_sets<const N: usize>(
     out: &mut Vec<Vec3>,
     weights: &mut Vec<[f32; N]>,
 ) {
-    part_samples_sets(&Part::whole(src), m, densities, rng, out, weights);
+    part_samples_sets(&Part::Whole(src), m, densities, rng, out, weights);
 }
 
 /// [`source_samples_sets`] over a part of the source ([`Part`]).
@@ -228,10 +227,6 @@ enum Part<'t> {
 }
 
 impl<'t> Part<'t> {
-    fn whole(src: &'t Tri) -> Part<'t> {
-        Part::Whole(src)
-    }
-
     /// The part of `src` that the receiver `(p, n)`, drawing `m` samples, draws them from: where
     /// the source reaches below the receiver's horizon and the receiver takes the analytic form
     /// (exact over the part above it, times the visible share of the samples), only the part
