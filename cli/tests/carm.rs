@@ -399,6 +399,18 @@ fn carm_reports_error_against_run_time_at_every_shot() {
     );
 }
 
+/// By the corners' average (`--element-means linear`) carm.occ's nodes keep three corners an
+/// element and book as the reference solver does by that rule; the two rules' solutions differ.
+#[test]
+fn carm_books_by_the_corners_average_as_the_reference_solver_does() {
+    let linear = ["--element-means", "linear"];
+    let (carm, reference) = carm_and_reference("carm-linear", &linear);
+    assert_agree(&carm, &reference, "linear: ");
+    let quadratic = &carm_runs()[1].1;
+    let differ = (means(&carm).iter().zip(&means(quadratic))).any(|((_, a), (_, b))| a != b);
+    assert!(differ, "the linear rule's solution is the quadratic rule's");
+}
+
 /// Overshooting by the ambient estimate, always on: carm.occ lends and takes back the overshoot
 /// as the reference solver does.
 #[test]
@@ -410,6 +422,19 @@ fn carm_overshoots_by_the_ambient_estimate_as_the_reference_solver() {
 #[test]
 fn carm_refuses_what_it_cannot_do_clearly() {
     let out = scratch("carm-refusals");
+    // carm.occ without its QUADRATIC capacity (refused before it is compiled)
+    std::fs::create_dir_all(&out).expect("a scratch folder");
+    let program =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../programs/carm.occ"))
+            .expect("carm.occ");
+    let without: String = (program.lines())
+        .filter(|l| !l.starts_with("VAL INT QUADRATIC IS"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert!(without.len() < program.len(), "carm.occ declares QUADRATIC");
+    let bare = out.join("no-quadratic.occ");
+    std::fs::write(&bare, without).expect("the copy");
+    let bare = bare.to_str().expect("a UTF-8 path");
     for (flags, says) in [
         (
             &["--solver", "carm", "--no-adapt", "--until", "time=1"][..],
@@ -427,10 +452,10 @@ fn carm_refuses_what_it_cannot_do_clearly() {
             ][..],
             "carm.occ runs on 1 to 1024 nodes",
         ),
-        // Its nodes book by the corners' average.
+        // A node program that cannot book by the quadratic rule, asked to.
         (
-            &["--solver", "carm", "--element-means", "quadratic"][..],
-            "--element-means quadratic is the reference solver's",
+            &["--solver", "carm", "--program", bare][..],
+            "does not book by the quadratic rule",
         ),
         // More rays per form factor than carm.occ's fixed arrays take.
         (

@@ -58,14 +58,7 @@ const CARM: &[&str] = &[
     "--until",
     "unshot=0.05",
 ];
-const REFERENCE: &[&str] = &[
-    "--solver",
-    "reference",
-    "--element-means",
-    "linear",
-    "--until",
-    "unshot=0.05",
-];
+const REFERENCE: &[&str] = &["--solver", "reference", "--until", "unshot=0.05"];
 
 /// carm.occ and the reference solver on `path`: finite, balanced, every object within 1%.
 fn agrees(path: &Path, name: &str) {

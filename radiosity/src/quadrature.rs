@@ -29,6 +29,8 @@ use glam::{DVec3, Vec3};
 
 use crate::mesh::Mesh;
 
+pub mod weights;
+
 /// A value the means are taken of: a form factor (`f32`, the same in every channel) or an RGB
 /// irradiance (`Vec3`).
 pub trait Field: Copy + Default + PartialEq + Add<Output = Self> + Mul<f32, Output = Self> {

@@ -21,6 +21,8 @@ use occ_codegen::network::{NetworkOptions, NetworkOutcome};
 use occ_radiosity::mesh::Mesh;
 use occ_radiosity::octree::flat::{FlatOctree, MAX_NAMED_TRIANGLES, NAMED_TRIANGLE_FLOATS};
 use occ_radiosity::overshoot::Acceleration;
+use occ_radiosity::quadrature::MeanRule;
+use occ_radiosity::quadrature::weights::{MeshSupport, element_weights};
 use occ_radiosity::solver::{ConvergencePoint, Solver, Until};
 use occ_runtime::remote::Transport;
 use occ_runtime::topology::Shape;
@@ -280,6 +282,13 @@ pub fn solve(
         .program
         .as_ref()
         .is_some_and(|(_, text)| declares(text, "MAX.TRIANGLES"));
+    if let Some((name, text)) = &settings.program {
+        anyhow::ensure!(
+            solver.config().element_means == MeanRule::Linear || declares(text, "QUADRATIC"),
+            "--program {name} does not book by the quadratic rule (it declares no QUADRATIC \
+             capacity, programs/README.md, \"Quadratic booking\"): run it with --element-means linear"
+        );
+    }
     let items = if named {
         Items::named(solver, &flat)?
     } else {
@@ -401,7 +410,8 @@ fn capacities(
         "--load-tolerance {tolerance}: a node must be able to hold at least its even share (1 or more)"
     );
     let mesh = &solver.mesh;
-    let corners_at = corners_at_points(mesh);
+    let rule = solver.config().element_means;
+    let corners_at = corners_at_points(mesh, rule);
     let most_at_one = corners_at.iter().copied().max().unwrap_or(0);
     // the nodes that keep sample points: all but the root, when there are others
     let keepers = settings.nodes.saturating_sub(1).max(1);
@@ -417,7 +427,14 @@ fn capacities(
     let most_at_first = most_elements_of_one_patch(mesh);
     let most_in_one = most_at_first + 2 * growth;
     let node_points = share(points).min(points);
-    let node_corners = share(3 * mesh.elements.len() + 10 * growth) + most_at_one + round(10);
+    // (a split's corners, five by the corners' average; by the quadratic rule the new
+    // elements' and the new point's weights, about 45: carm-common.inc's ROUND.CORNERS)
+    let per_point = match rule {
+        MeanRule::Linear => 10,
+        MeanRule::Quadratic => 64,
+    };
+    let dealt_corners: usize = corners_at.iter().sum();
+    let node_corners = share(dealt_corners + per_point * growth) + most_at_one + round(per_point);
     let mut capacities = vec![
         ("MAX.POINTS", points),
         // adaptive subdivision's arrays at the root: none when it can add no point
@@ -426,7 +443,14 @@ fn capacities(
         ("NODE.CORNERS", node_corners),
         (
             "NODE.PATCHES",
-            node_patches(mesh, settings.nodes, node_points, node_corners, growth > 0),
+            node_patches(
+                mesh,
+                rule,
+                settings.nodes,
+                node_points,
+                node_corners,
+                growth > 0,
+            ),
         ),
         ("MAX.ELEMENTS", elements),
         ("MAX.PATCH.ELEMENTS", most_in_one),
@@ -500,26 +524,30 @@ fn capacities(
             ("THREADS", settings.worker_threads),
             ("LOAN", if settings.poach { LOAN } else { 0 }),
             ("CHANNEL.GRIDS", usize::from(settings.channel_grids)),
+            ("QUADRATIC", usize::from(rule == MeanRule::Quadratic)),
         ])
         .collect())
 }
 
 /// The most patches a node has element corners of, as the controller deals the sample points
-/// (`deal`), and with adaptive subdivision the most it can come to: a split brings a node a
-/// patch new to it only through the new point's two corners (x, y and c are corners of the
-/// element already), so a node with `c` corners of `p` patches at the start has at most
-/// `p + (node_corners - c) / 2` of them (the controller keeps every node within
-/// `node_corners`). Never more than the scene's patches; all of them when no node has room
-/// for some point (the controller stops the run then).
+/// (`deal`), and with adaptive subdivision the most it can come to. By the corners' average a
+/// split brings a node a patch new to it only through the new point's two corners (x, y and c
+/// are corners of the element already), so a node with `c` corners of `p` patches at the start
+/// has at most `p + (node_corners - c) / 2` of them (the controller keeps every node within
+/// `node_corners`); by the quadratic rule a node has a corner of an element at each point of
+/// its support, and any new corner may bring a new patch: `p + node_corners - c`. Never more
+/// than the scene's patches; all of them when no node has room for some point (the
+/// controller stops the run then).
 fn node_patches(
     mesh: &Mesh,
+    rule: MeanRule,
     nodes: usize,
     node_points: usize,
     node_corners: usize,
     adapt: bool,
 ) -> usize {
     let all = mesh.patches.len();
-    let Some(dealt) = deal(mesh, nodes, node_points, node_corners) else {
+    let Some(dealt) = deal(mesh, rule, nodes, node_points, node_corners) else {
         return all;
     };
     // The elements go grouped by patch (host_input), so a node's patches come one after another.
@@ -527,21 +555,32 @@ fn node_patches(
     by_patch.sort_by_key(|&e| mesh.elements[e].patch);
     let mut patches = vec![0usize; nodes];
     let mut last = vec![u32::MAX; nodes];
-    for e in by_patch.iter().map(|&e| &mesh.elements[e]) {
-        for v in e.v {
+    let support = (rule == MeanRule::Quadratic).then(|| MeshSupport::new(mesh));
+    let mut weights = Vec::new();
+    for &e in &by_patch {
+        let patch = mesh.elements[e].patch;
+        match &support {
+            Some(support) => element_weights(support, e as u32, &mut weights),
+            None => {
+                weights.clear();
+                weights.extend(mesh.elements[e].v.map(|v| (v, 0.0)));
+            }
+        }
+        for &(v, _) in &weights {
             let k = dealt.node[v as usize];
-            if last[k] != e.patch {
-                last[k] = e.patch;
+            if last[k] != patch {
+                last[k] = patch;
                 patches[k] += 1;
             }
         }
     }
     // the room adaptive subdivision may fill on node k
     let room = |k: usize| {
-        if adapt {
-            node_corners.saturating_sub(dealt.corners[k]) / 2
-        } else {
-            0
+        let free = node_corners.saturating_sub(dealt.corners[k]);
+        match (adapt, rule) {
+            (false, _) => 0,
+            (true, MeanRule::Linear) => free / 2,
+            (true, MeanRule::Quadratic) => free,
         }
     };
     let most = (0..nodes).map(|k| patches[k] + room(k)).max().unwrap_or(0);
@@ -562,13 +601,19 @@ struct Dealt {
 /// the point's); then to a re-hash's, and after as many re-hashes as nodes, to the next node
 /// with room (never the root when there are others). `None` when no node has room for some
 /// point.
-fn deal(mesh: &Mesh, nodes: usize, node_points: usize, node_corners: usize) -> Option<Dealt> {
+fn deal(
+    mesh: &Mesh,
+    rule: MeanRule,
+    nodes: usize,
+    node_points: usize,
+    node_corners: usize,
+) -> Option<Dealt> {
     let mut points = vec![0usize; nodes];
     let mut dealt = Dealt {
         node: Vec::with_capacity(mesh.vertices.len()),
         corners: vec![0; nodes],
     };
-    for (v, c) in mesh.vertices.iter().zip(corners_at_points(mesh)) {
+    for (v, c) in mesh.vertices.iter().zip(corners_at_points(mesh, rule)) {
         let pn = [
             v.pos.x, v.pos.y, v.pos.z, v.normal.x, v.normal.y, v.normal.z,
         ];
@@ -634,15 +679,24 @@ fn most_elements_of_one_patch(mesh: &Mesh) -> usize {
     per_patch.into_iter().max().unwrap_or(0)
 }
 
-/// How many element corners sit at each sample point.
-fn corners_at_points(mesh: &Mesh) -> Vec<usize> {
-    let mut out = vec![0; mesh.vertices.len()];
-    for e in &mesh.elements {
-        for v in e.v {
-            out[v as usize] += 1;
+/// The element corners the controller counts at each sample point: by the corners' average one
+/// per element it is a corner of; by the quadratic rule one per element whose support it is in
+/// (programs/README.md, "Quadratic booking").
+fn corners_at_points(mesh: &Mesh, rule: MeanRule) -> Vec<usize> {
+    match rule {
+        MeanRule::Linear => {
+            let mut out = vec![0; mesh.vertices.len()];
+            for e in &mesh.elements {
+                for v in e.v {
+                    out[v as usize] += 1;
+                }
+            }
+            out
         }
+        MeanRule::Quadratic => (MeshSupport::new(mesh).entries_at_vertices().into_iter())
+            .map(|c| c as usize)
+            .collect(),
     }
-    out
 }
 
 /// `program` with the value of each `VAL INT NAME IS n:` line whose name `capacities` lists
@@ -875,7 +929,8 @@ fn host_input(
         w.int(back.len() as i32);
         back.iter().for_each(|&x| w.real32(x));
     }
-    for (v, c) in mesh.vertices.iter().zip(corners_at_points(mesh)) {
+    let rule = config.element_means;
+    for (v, c) in mesh.vertices.iter().zip(corners_at_points(mesh, rule)) {
         w.vec3(v.pos);
         w.vec3(v.normal);
         w.vec3(v.eval);

@@ -116,9 +116,10 @@ pub struct Args {
     #[arg(long)]
     pub summed_density: bool,
     /// How a shot's power into an element, and an object's mean, are taken from the values at
-    /// the element's corners: quadratic (with the curvature the neighbouring vertices show;
-    /// the reference solver's default: radiosity/REFERENCES.md, "Element means exact for
-    /// quadratics") or linear (the corners' average; carm.occ books so, and takes only that).
+    /// the element's corners: quadratic (the default, with the curvature the neighbouring
+    /// vertices show: radiosity/REFERENCES.md, "Element means exact for quadratics"; carm.occ's
+    /// nodes keep each element's weights on its support, about four corners an element:
+    /// programs/README.md, "Quadratic booking") or linear (the corners' average).
     #[arg(long)]
     pub element_means: Option<MeanRule>,
     /// Where carm.occ's nodes run: inproc (this process) or mpi (spread over the ranks of
@@ -666,12 +667,6 @@ fn check_args(args: &Args) -> anyhow::Result<()> {
         "--image-size must be between 8 and 8192"
     );
     anyhow::ensure!(args.nodes >= 1, "--nodes must be at least 1");
-    anyhow::ensure!(
-        args.element_means != Some(MeanRule::Quadratic)
-            || matches!(args.solver, SolverKind::Reference),
-        "--element-means quadratic is the reference solver's (--solver reference): carm.occ's \
-         nodes book a shot's power by the corners' average (programs/README.md, \"Not there yet\")"
-    );
     if let SolverKind::Carm = args.solver {
         anyhow::ensure!(
             !matches!(args.until, Until::Seconds(_)),
@@ -712,13 +707,9 @@ const CONVERGED: f64 = 1e-4;
 /// The fewest rays per form factor `--converge` uses.
 const CONVERGED_RAYS: u32 = 64;
 
-/// The rule for elements' means: as given, else quadratic for the reference solver and linear
-/// (what its nodes book) for carm.occ.
+/// The rule for elements' means: as given, else quadratic (both solvers book by it).
 fn element_means(args: &Args) -> MeanRule {
-    args.element_means.unwrap_or(match args.solver {
-        SolverKind::Reference => MeanRule::Quadratic,
-        SolverKind::Carm => MeanRule::Linear,
-    })
+    args.element_means.unwrap_or_default()
 }
 
 fn solver_config(args: &Args, diag: f32, element_size: f32) -> SolverConfig {

@@ -261,6 +261,20 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: refine::refine_split as *const u8,
     },
     Intrinsic {
+        name: "RAD.ELEMENTS.AROUND",
+        params: &[ValInts, VarInts, VarInts, ResultInt],
+        result: None,
+        addr: weights::elements_around_of as *const u8,
+    },
+    Intrinsic {
+        name: "RAD.ELEMENT.WEIGHTS",
+        params: &[
+            ValInts, ValReal32s, ValInts, ValInts, ValInts, VarInts, VarInts, VarReal64s, ResultInt,
+        ],
+        result: None,
+        addr: weights::element_weights_of as *const u8,
+    },
+    Intrinsic {
         name: "RAD.POINTS.ORDER",
         params: &[ValReal32s, VarInts, ResultInt],
         result: None,
@@ -766,6 +780,7 @@ mod refine;
 #[cfg(test)]
 mod test;
 pub mod weighted;
+mod weights;
 
 mod walk;
 

@@ -1,0 +1,208 @@
+//! The quadratic rule's weights for a node program that keeps the mesh in its own arrays
+//! (carm.occ's controller): `RAD.ELEMENTS.AROUND` lists the elements around each vertex and
+//! `RAD.ELEMENT.WEIGHTS` gives chosen elements' integrals as weights on vertices
+//! ([`crate::quadrature::weights`], the reference solver's rule).
+
+use glam::Vec3;
+use occ_runtime::abi::Word;
+
+use super::{array, array_mut};
+use crate::quadrature::weights::{Support, element_weights, elements_around};
+
+/// Floats per sample point in the controller's arrays: position, normal, evaluation point.
+const POINT_FLOATS: usize = 9;
+
+/// `PROC RAD.ELEMENTS.AROUND (VAL []INT element, []INT first, []INT around, RESULT INT count)`:
+/// the elements around each vertex of the mesh `element` (three vertex indices a triangle, the
+/// triangles in use only): vertex `v`'s are `around[first[v] .. first[v + 1] - 1]`, ascending,
+/// for the `SIZE first - 1` vertices. `count` is the number written to `around` (three a
+/// triangle), or -1 (nothing written) on a vertex index out of range or `around` too short.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI).
+pub unsafe extern "C" fn elements_around_of(
+    element: *const i32,
+    element_len: Word,
+    first: *mut i32,
+    first_len: Word,
+    around: *mut i32,
+    around_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (element, first, around) = unsafe {
+        (
+            array(element, element_len),
+            array_mut(first, first_len),
+            array_mut(around, around_len),
+        )
+    };
+    let vertices = first.len().saturating_sub(1);
+    let valid = !first.is_empty()
+        && element.len().is_multiple_of(3)
+        && around.len() >= element.len()
+        && element.iter().all(|&v| v >= 0 && (v as usize) < vertices);
+    let written = if valid {
+        let (f, list) = elements_around(vertices, corners_of(element));
+        first.iter_mut().zip(f).for_each(|(o, x)| *o = x as i32);
+        around
+            .iter_mut()
+            .zip(&list)
+            .for_each(|(o, &x)| *o = x as i32);
+        list.len() as Word
+    } else {
+        -1
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
+/// `PROC RAD.ELEMENT.WEIGHTS (VAL []INT element, VAL []REAL32 point, VAL []INT first, around,
+/// which, []INT count, at, []REAL64 weight, RESULT INT n)`: the integrals (area times mean,
+/// by the quadratic rule) of the elements `which` of the mesh `element` (three vertex indices
+/// a triangle; `point`: 9 floats a vertex, position, normal, evaluation point, a zero normal
+/// for a hidden one; `first` and `around` as `RAD.ELEMENTS.AROUND` wrote them) as weights on
+/// vertices ([`element_weights`]): element `which[i]` has `count[i]` of them, its three corners
+/// first, one after another in `at` (the vertex) and `weight`. `n` is the number written, or
+/// -1 on a wrong length, an index out of range, or `at` or `weight` too short.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `n` for one word (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn element_weights_of(
+    element: *const i32,
+    element_len: Word,
+    point: *const f32,
+    point_len: Word,
+    first: *const i32,
+    first_len: Word,
+    around: *const i32,
+    around_len: Word,
+    which: *const i32,
+    which_len: Word,
+    count: *mut i32,
+    count_len: Word,
+    at: *mut i32,
+    at_len: Word,
+    weight: *mut f64,
+    weight_len: Word,
+    n: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (element, point, first, around, which, count, at, weight) = unsafe {
+        (
+            array(element, element_len),
+            array(point, point_len),
+            array(first, first_len),
+            array(around, around_len),
+            array(which, which_len),
+            array_mut(count, count_len),
+            array_mut(at, at_len),
+            array_mut(weight, weight_len),
+        )
+    };
+    let mesh = FlatSupport {
+        element,
+        point,
+        first,
+        around,
+    };
+    let written = if mesh.valid() && count.len() >= which.len() {
+        write_weights(&mesh, which, count, at, weight).map_or(-1, |n| n as Word)
+    } else {
+        -1
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *n = written };
+}
+
+/// `RAD.ELEMENT.WEIGHTS`'s work: the number written, or `None` when `at` or `weight` runs out.
+fn write_weights(
+    mesh: &FlatSupport,
+    which: &[i32],
+    count: &mut [i32],
+    at: &mut [i32],
+    weight: &mut [f64],
+) -> Option<usize> {
+    let elements = mesh.element.len() / 3;
+    let mut out = Vec::new();
+    let mut n = 0;
+    for (&e, c) in which.iter().zip(count.iter_mut()) {
+        if e < 0 || e as usize >= elements {
+            return None;
+        }
+        element_weights(mesh, e as u32, &mut out);
+        let (at, weight) = (
+            at.get_mut(n..n + out.len())?,
+            weight.get_mut(n..n + out.len())?,
+        );
+        for ((a, w), &(v, x)) in at.iter_mut().zip(weight.iter_mut()).zip(&out) {
+            (*a, *w) = (v as i32, x);
+        }
+        *c = out.len() as i32;
+        n += out.len();
+    }
+    Some(n)
+}
+
+/// The triangles of a flat element array.
+fn corners_of(element: &[i32]) -> impl Iterator<Item = [u32; 3]> + Clone + '_ {
+    element
+        .chunks_exact(3)
+        .map(|v| [v[0] as u32, v[1] as u32, v[2] as u32])
+}
+
+/// The controller's arrays as a [`Support`].
+struct FlatSupport<'a> {
+    element: &'a [i32],
+    point: &'a [f32],
+    first: &'a [i32],
+    around: &'a [i32],
+}
+
+impl FlatSupport<'_> {
+    /// Whether the arrays agree: every corner a vertex, every list within `around` and every
+    /// listed element one of `element`'s.
+    fn valid(&self) -> bool {
+        let vertices = self.point.len() / POINT_FLOATS;
+        let elements = self.element.len() / 3;
+        self.point.len().is_multiple_of(POINT_FLOATS)
+            && self.element.len().is_multiple_of(3)
+            && self.first.len() == vertices + 1
+            && self
+                .element
+                .iter()
+                .all(|&v| v >= 0 && (v as usize) < vertices)
+            && self.first.windows(2).all(|w| 0 <= w[0] && w[0] <= w[1])
+            && self
+                .first
+                .last()
+                .is_some_and(|&l| l as usize <= self.around.len())
+            && self
+                .around
+                .iter()
+                .all(|&e| e >= 0 && (e as usize) < elements)
+    }
+}
+
+impl Support for FlatSupport<'_> {
+    fn corners(&self, e: u32) -> [u32; 3] {
+        let v = &self.element[3 * e as usize..][..3];
+        [v[0] as u32, v[1] as u32, v[2] as u32]
+    }
+    fn pos(&self, v: u32) -> Vec3 {
+        Vec3::from_slice(&self.point[POINT_FLOATS * v as usize..][..3])
+    }
+    fn hidden(&self, v: u32) -> bool {
+        Vec3::from_slice(&self.point[POINT_FLOATS * v as usize + 3..][..3]) == Vec3::ZERO
+    }
+    fn around(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
+        let (a, b) = (self.first[v as usize], self.first[v as usize + 1]);
+        self.around[a as usize..b as usize]
+            .iter()
+            .map(|&e| e as u32)
+    }
+}
