@@ -572,10 +572,12 @@ pub unsafe extern "C" fn points_receive(
 /// `point[c]`, whose form factor to the source is `factor[point[c]]`, belongs to patch
 /// `patch[c]` and weighs `weight[c]` (a third of its element's area): the power
 /// `db · factor · weight` is added to the patch's `received` (3 REAL64s a patch) and, times the
-/// patch's reflectance `rho` (3 REAL32s a patch), to the corner's `unshot` (3 REAL64s a corner).
-/// Corners whose factor is 0 are skipped. `count` is n, or -1 (nothing written) when the corner
-/// arrays differ in length, `unshot` is not 3n, `db` not 3, `rho` and `received` not the same
-/// multiple of 3, or an index is out of range.
+/// patch's reflectance `rho` (3 REAL32s a patch), to the corner's `unshot` (3 REAL64s a corner;
+/// or, `unshot` empty, only to `received`: a program that keeps the corners' power by another
+/// way, carm.occ's weights per patch and point). Corners whose factor is 0 are skipped. `count`
+/// is n, or -1 (nothing written) when the corner arrays differ in length, `unshot` is neither
+/// 3n nor empty, `db` not 3, `rho` and `received` not the same multiple of 3, or an index is out
+/// of range.
 ///
 /// # Safety
 /// The arrays are valid for their lengths and `count` for one word (the occam ABI); the
@@ -750,7 +752,7 @@ fn book_corners(
     let valid = valid
         && patch.len() == n
         && weight.len() == n
-        && unshot.len() == 3 * n
+        && (unshot.len() == 3 * n || unshot.is_empty())
         && db.len() == 3
         && rho.len() == 3 * patches
         && received.len() == rho.len()
@@ -780,7 +782,9 @@ fn book_corners(
                 }
                 let power = db[j] * (f64::from(f) * weight[c]);
                 sums[j] += power;
-                unshot[3 * c + j] += power * rho[j];
+                if let Some(u) = unshot.get_mut(3 * c + j) {
+                    *u += power * rho[j];
+                }
             }
         }
         received[at..at + 3].copy_from_slice(&sums);

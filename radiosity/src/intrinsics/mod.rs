@@ -239,6 +239,15 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: batch::corners_receive_sets as *const u8,
     },
     Intrinsic {
+        name: "RAD.CORNERS.GATHER",
+        params: &[
+            ValInt, ValInts, ValInts, ValInts, ValReal64s, ValReal32s, ValReal64s, VarReal64s,
+            VarReal64s, ValReal64, VarReal64s, ResultInt,
+        ],
+        result: None,
+        addr: gather::corners_gather as *const u8,
+    },
+    Intrinsic {
         name: "RAD.PATCHES.TAKE",
         params: &[ValInts, VarReal64s, VarInts, VarReal64s, ResultInt],
         result: None,
@@ -775,6 +784,7 @@ pub unsafe extern "C" fn shadow_rays_batch(
 mod assemble;
 mod batch;
 pub mod estimate;
+mod gather;
 mod order;
 mod refine;
 #[cfg(test)]
