@@ -13,7 +13,8 @@ use super::{array, array_mut};
 /// settled, `unshot[3c + j]`, and what its point gathered since, times its weight and the
 /// patch's reflectance `rho` (3): `weight[c] · rho[j] · (acc[3 point[c] + j] − base[3c + j])`.
 /// With `keep` < 0 nothing is written but `out`; else each corner is settled (`unshot` takes
-/// its power, `base` its point's `acc`) and then keeps `keep` of it (a shooter's share). `count`
+/// its power, `base` its point's `acc`) and then keeps `keep` of it (a shooter's share), and
+/// `out` may be empty (nothing added: the share kept is all that is wanted). `count`
 /// is the corners walked, or -1 when an index is out of range or the list is longer than the
 /// corners (a cycle): the walk stops there, part of the list added.
 ///
@@ -106,11 +107,17 @@ impl LazyCorners<'_> {
             let i = usize::try_from(c).ok().filter(|&i| i < n && walked < n)?;
             let e = 3 * usize::try_from(self.element[i]).ok()?;
             let p = 3 * usize::try_from(self.point[i]).ok()?;
-            let (out, acc) = (out.get_mut(e..e + 3)?, self.acc.get(p..p + 3)?);
+            let acc = self.acc.get(p..p + 3)?;
+            let mut out = match (out.is_empty(), keep) {
+                (true, Some(_)) => None,
+                _ => Some(out.get_mut(e..e + 3)?),
+            };
             for j in 0..3 {
                 let at = 3 * i + j;
                 let power = self.unshot[at] + self.weight[i] * rho[j] * (acc[j] - self.base[at]);
-                out[j] += power;
+                if let Some(out) = out.as_mut() {
+                    out[j] += power;
+                }
                 if let Some(keep) = keep {
                     self.unshot[at] = power * keep;
                     self.base[at] = acc[j];
@@ -158,6 +165,21 @@ mod tests {
             [9.0; 3],
             "another patch's corner is left alone"
         );
+        // the share kept alone, nothing added anywhere
+        let mut corners = LazyCorners {
+            next: &[2, -1, -1],
+            element: &[1, 0, 0],
+            point: &[0, 1, 1],
+            weight: &[2.0, 9.0, 0.5],
+            acc: &acc,
+            unshot: &mut unshot,
+            base: &mut base,
+        };
+        assert_eq!(
+            corners.gather(0, [0.5, 0.25, 1.0], Some(0.5), &mut []),
+            Some(2)
+        );
+        assert_eq!(unshot[6..], [0.375, 0.3125, 0.5]);
     }
 
     #[test]
