@@ -110,7 +110,7 @@ pub unsafe extern "C" fn element_weights_of(
         first,
         around,
     };
-    let written = if mesh.valid() && count.len() >= which.len() {
+    let written = if mesh.shaped() && count.len() >= which.len() {
         write_weights(&mesh, which, count, at, weight).map_or(-1, |n| n as Word)
     } else {
         -1
@@ -131,7 +131,7 @@ fn write_weights(
     let mut out = Vec::new();
     let mut n = 0;
     for (&e, c) in which.iter().zip(count.iter_mut()) {
-        if e < 0 || e as usize >= elements {
+        if e < 0 || e as usize >= elements || !mesh.valid_around(e as u32) {
             return None;
         }
         element_weights(mesh, e as u32, &mut out);
@@ -164,27 +164,36 @@ struct FlatSupport<'a> {
 }
 
 impl FlatSupport<'_> {
-    /// Whether the arrays agree: every corner a vertex, every list within `around` and every
-    /// listed element one of `element`'s.
-    fn valid(&self) -> bool {
+    /// Whether the arrays' lengths agree (each element's neighbourhood is checked as it is
+    /// weighed: [`FlatSupport::valid_around`], so that a call costs its elements' supports,
+    /// not the mesh).
+    fn shaped(&self) -> bool {
         let vertices = self.point.len() / POINT_FLOATS;
-        let elements = self.element.len() / 3;
         self.point.len().is_multiple_of(POINT_FLOATS)
             && self.element.len().is_multiple_of(3)
             && self.first.len() == vertices + 1
-            && self
-                .element
+    }
+
+    /// Whether everything element `e`'s weights read is in range: its corners, the lists of
+    /// the elements around them, and those elements' corners.
+    fn valid_around(&self, e: u32) -> bool {
+        let vertices = self.point.len() / POINT_FLOATS;
+        let elements = self.element.len() / 3;
+        let corners_ok = |e: usize| {
+            (self.element[3 * e..3 * e + 3].iter()).all(|&v| v >= 0 && (v as usize) < vertices)
+        };
+        corners_ok(e as usize)
+            && self.element[3 * e as usize..3 * e as usize + 3]
                 .iter()
-                .all(|&v| v >= 0 && (v as usize) < vertices)
-            && self.first.windows(2).all(|w| 0 <= w[0] && w[0] <= w[1])
-            && self
-                .first
-                .last()
-                .is_some_and(|&l| l as usize <= self.around.len())
-            && self
-                .around
-                .iter()
-                .all(|&e| e >= 0 && (e as usize) < elements)
+                .all(|&v| {
+                    let (a, b) = (self.first[v as usize], self.first[v as usize + 1]);
+                    0 <= a
+                        && a <= b
+                        && (b as usize) <= self.around.len()
+                        && self.around[a as usize..b as usize]
+                            .iter()
+                            .all(|&o| o >= 0 && (o as usize) < elements && corners_ok(o as usize))
+                })
     }
 }
 
@@ -204,5 +213,69 @@ impl Support for FlatSupport<'_> {
         self.around[a as usize..b as usize]
             .iter()
             .map(|&e| e as u32)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two triangles sharing an edge, in the plane z = 0: points 0..4 (9 floats each).
+    fn square() -> (Vec<i32>, Vec<f32>) {
+        let element = vec![0, 1, 2, 0, 2, 3];
+        let mut point = Vec::new();
+        for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            point.extend([x, y, 0.0, 0.0, 0.0, 1.0, x, y, 0.0]);
+        }
+        (element, point)
+    }
+
+    #[test]
+    fn the_weights_of_listed_elements_come_with_their_corners_first() {
+        let (element, point) = square();
+        let (first, around) = elements_around(4, corners_of(&element));
+        let (first, around): (Vec<i32>, Vec<i32>) = (
+            first.iter().map(|&x| x as i32).collect(),
+            around.iter().map(|&x| x as i32).collect(),
+        );
+        let mesh = FlatSupport {
+            element: &element,
+            point: &point,
+            first: &first,
+            around: &around,
+        };
+        let (mut count, mut at, mut weight) = ([0; 2], [0; 16], [0.0; 16]);
+        let n = write_weights(&mesh, &[1, 0], &mut count, &mut at, &mut weight);
+        assert_eq!(n, Some(count.iter().sum::<i32>() as usize));
+        assert_eq!(at[..3], [0, 2, 3]);
+        let sum: f64 = weight[..count[0] as usize].iter().sum();
+        assert!(
+            (sum - 0.5).abs() < 1e-6,
+            "a constant field's integral is the area: {sum}"
+        );
+        // no room for both elements' weights
+        assert_eq!(
+            write_weights(&mesh, &[1, 0], &mut count, &mut at[..5], &mut weight),
+            None
+        );
+    }
+
+    #[test]
+    fn an_element_listed_around_a_point_that_does_not_exist_is_refused() {
+        let (element, point) = square();
+        let first = [0, 2, 3, 5, 6];
+        let around = [0, 1, 0, 0, 9, 1];
+        let mesh = FlatSupport {
+            element: &element,
+            point: &point,
+            first: &first,
+            around: &around,
+        };
+        assert!(mesh.shaped());
+        let (mut count, mut at, mut weight) = ([0; 1], [0; 16], [0.0; 16]);
+        assert_eq!(
+            write_weights(&mesh, &[0], &mut count, &mut at, &mut weight),
+            None
+        );
     }
 }
