@@ -122,22 +122,18 @@ fn forcing_every_stage_on_agrees_and_leaving_one_out_is_said() {
 /// apart.)
 #[test]
 fn carm_leaves_out_shadow_rays_where_the_reference_solver_does() {
+    let linear = ["--element-means", "linear"];
     let carm = [
-        "--solver",
-        "carm",
-        "--nodes",
-        "4",
-        "--threads",
-        "1",
-        "--element-means",
-        "linear",
-    ];
+        &["--solver", "carm", "--nodes", "4", "--threads", "1"][..],
+        &linear,
+    ]
+    .concat();
     let (lean, lean_err) = convex_room(&scratch("stages-carm-lean"), &carm);
     let all = [&carm[..], &["--all-stages"]].concat();
     let (full, _) = convex_room(&scratch("stages-carm-full"), &all);
     let (reference, _) = convex_room(
         &scratch("stages-carm-reference"),
-        &["--solver", "reference", "--element-means", "linear"],
+        &[&["--solver", "reference"][..], &linear].concat(),
     );
     assert!(lean_err.contains("left out: shadow rays"), "{lean_err}");
     assert!(left_out(&lean).iter().any(|s| s.starts_with("shadow rays")));

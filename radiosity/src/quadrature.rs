@@ -341,7 +341,7 @@ mod tests {
     use crate::mesh::{Element, Mesh, Vertex};
 
     /// A square `[0, n]²` in the plane z = 0 cut into `2n²` right triangles, facing +z.
-    fn grid(n: u32) -> Mesh {
+    pub(super) fn grid(n: u32) -> Mesh {
         let mut mesh = Mesh::default();
         for j in 0..=n {
             for i in 0..=n {
@@ -367,6 +367,25 @@ mod tests {
             }
         }
         mesh
+    }
+
+    /// Splits element `e` of `mesh` at the middle of its first edge, as refinement does: it
+    /// keeps its index and shrinks, the other half is appended.
+    pub(super) fn split_first_edge(mesh: &mut Mesh, e: usize) {
+        let [a, b, c] = mesh.elements[e].v;
+        let pos = (mesh.vertices[a as usize].pos + mesh.vertices[b as usize].pos) * 0.5;
+        mesh.vertices.push(Vertex {
+            pos,
+            normal: Vec3::Z,
+            eval: pos,
+        });
+        let m = mesh.vertices.len() as u32 - 1;
+        mesh.elements[e].v = [a, m, c];
+        mesh.elements.push(Element {
+            v: [m, b, c],
+            object: 0,
+            patch: 0,
+        });
     }
 
     /// The area-weighted mean over the mesh of the elements' means of `f` at the vertices.
@@ -444,22 +463,7 @@ mod tests {
     fn fitting_after_a_split_gives_what_a_fresh_build_gives() {
         let mut mesh = grid(4);
         let mut means = ElementMeans::new(&mesh, MeanRule::Quadratic);
-        // Split element 9 at the middle of its first edge, as refinement does: it keeps its
-        // index and shrinks, the other half is appended.
-        let [a, b, c] = mesh.elements[9].v;
-        let pos = (mesh.vertices[a as usize].pos + mesh.vertices[b as usize].pos) * 0.5;
-        mesh.vertices.push(Vertex {
-            pos,
-            normal: Vec3::Z,
-            eval: pos,
-        });
-        let m = mesh.vertices.len() as u32 - 1;
-        mesh.elements[9].v = [a, m, c];
-        mesh.elements.push(Element {
-            v: [m, b, c],
-            object: 0,
-            patch: 0,
-        });
+        split_first_edge(&mut mesh, 9);
         assert!(!means.fits(&mesh));
         means.fit(&mesh);
         assert!(means.fits(&mesh));

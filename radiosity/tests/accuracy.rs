@@ -518,27 +518,14 @@ fn cornell_surfaces_are_within_one_percent_of_the_path_tracer_at_the_defaults() 
     };
     let mut solver = Solver::new(&scene, mesh, config);
     solver.run(|_, _| {});
-    let total: f64 = reference.objects.iter().map(|o| o.area).sum();
-    let mean: [f64; 3] = std::array::from_fn(|c| {
-        (reference.objects.iter())
-            .map(|o| o.area * o.mean_b[c])
-            .sum::<f64>()
-            / total
-    });
     for (o, (_, b)) in scene.objects.iter().zip(solver.object_means()) {
         if o.emission != Vec3::ZERO {
             continue;
         }
         let r = reference.object(&o.name).expect("object in the reference");
         for c in 0..3 {
-            let share = if r.mean_b[c] < 0.1 * mean[c] {
-                0.02
-            } else {
-                0.01
-            };
-            let tolerance = share * r.mean_b[c] + 3.0 * r.std_err[c];
             assert!(
-                (b[c] - r.mean_b[c]).abs() <= tolerance,
+                (b[c] - r.mean_b[c]).abs() <= reference.tolerance(r, c),
                 "{} channel {c}: solver {} against path-traced {} ± {}",
                 o.name,
                 b[c],

@@ -134,25 +134,28 @@ impl LazyCorners<'_> {
 mod tests {
     use super::*;
 
+    /// Corners 0 -> 2 of a patch (1 is another patch's): element 1 at point 0, element 0 at
+    /// point 1, with `unshot` and `base` as given; point 0 gathered 1, point 1 gathered 4.
+    fn patch<'a>(unshot: &'a mut [f64; 9], base: &'a mut [f64; 9]) -> LazyCorners<'a> {
+        LazyCorners {
+            next: &[2, -1, -1],
+            element: &[1, 0, 0],
+            point: &[0, 1, 1],
+            weight: &[2.0, 9.0, 0.5],
+            acc: &[1.0, 1.0, 1.0, 4.0, 4.0, 4.0],
+            unshot,
+            base,
+        }
+    }
+
     #[test]
     fn the_list_adds_each_corner_s_settled_and_lazy_power_to_its_element() {
-        // corners 0 -> 2 of the patch (1 is another patch's): element 1 at point 0, element 0
-        // at point 1
         let mut unshot = [0.1, 0.2, 0.3, 9.0, 9.0, 9.0, 1.0, 1.0, 1.0];
         let mut base = [0.5, 0.5, 0.5, 0.0, 0.0, 0.0, 2.0, 2.0, 2.0];
-        let acc = [1.0, 1.0, 1.0, 4.0, 4.0, 4.0];
+        let rho = [0.5, 0.25, 1.0];
         for keep in [None, Some(0.5)] {
-            let mut corners = LazyCorners {
-                next: &[2, -1, -1],
-                element: &[1, 0, 0],
-                point: &[0, 1, 1],
-                weight: &[2.0, 9.0, 0.5],
-                acc: &acc,
-                unshot: &mut unshot,
-                base: &mut base,
-            };
             let mut out = [0.0; 6];
-            let walked = corners.gather(0, [0.5, 0.25, 1.0], keep, &mut out);
+            let walked = patch(&mut unshot, &mut base).gather(0, rho, keep, &mut out);
             assert_eq!(walked, Some(2));
             // element 0: 1 + 0.5 * rho * (4 - 2); element 1: unshot + 2 * rho * (1 - 0.5)
             assert_eq!(out, [1.5, 1.25, 2.0, 0.6, 0.45, 1.3]);
@@ -160,25 +163,11 @@ mod tests {
         // settled, then half kept: corner 2 holds half its power, its base its point's acc
         assert_eq!(unshot[6..], [0.75, 0.625, 1.0]);
         assert_eq!(base[6..], [4.0; 3]);
-        assert_eq!(
-            unshot[3..6],
-            [9.0; 3],
-            "another patch's corner is left alone"
-        );
+        let other = &unshot[3..6];
+        assert_eq!(other, [9.0; 3], "another patch's corner is left alone");
         // the share kept alone, nothing added anywhere
-        let mut corners = LazyCorners {
-            next: &[2, -1, -1],
-            element: &[1, 0, 0],
-            point: &[0, 1, 1],
-            weight: &[2.0, 9.0, 0.5],
-            acc: &acc,
-            unshot: &mut unshot,
-            base: &mut base,
-        };
-        assert_eq!(
-            corners.gather(0, [0.5, 0.25, 1.0], Some(0.5), &mut []),
-            Some(2)
-        );
+        let walked = patch(&mut unshot, &mut base).gather(0, rho, Some(0.5), &mut []);
+        assert_eq!(walked, Some(2));
         assert_eq!(unshot[6..], [0.375, 0.3125, 0.5]);
     }
 

@@ -111,6 +111,23 @@ impl Reference {
     pub fn object(&self, name: &str) -> Option<&ObjectTruth> {
         self.objects.iter().find(|o| o.name == name)
     }
+
+    /// How far a solver's mean of `object`'s channel `c` may be from this reference: 1% of the
+    /// reference's mean, 2% where the channel is below a tenth of the scene's area-weighted mean
+    /// (the light included: a dim face), plus three of the reference's standard errors.
+    pub fn tolerance(&self, object: &ObjectTruth, c: usize) -> f64 {
+        let area: f64 = self.objects.iter().map(|o| o.area).sum();
+        let mean = (self.objects.iter())
+            .map(|o| o.area * o.mean_b[c])
+            .sum::<f64>()
+            / area;
+        let share = if object.mean_b[c] < 0.1 * mean {
+            0.02
+        } else {
+            0.01
+        };
+        share * object.mean_b[c] + 3.0 * object.std_err[c]
+    }
 }
 
 /// Each object's area, from the scene's triangles (the path tracer samples them).

@@ -144,50 +144,13 @@ pub fn elements_around(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::{Element, Vertex};
     use crate::quadrature::{ElementMeans, MeanRule};
 
-    /// A square `[0, n]²` in the plane z = 0 cut into `2n²` right triangles, with one edge
-    /// split (refinement's way) so that the vertices' degrees differ.
+    /// [`crate::quadrature::tests::grid`]'s square with one edge split (refinement's way), so
+    /// that the vertices' degrees differ.
     fn mesh(n: u32) -> Mesh {
-        let mut mesh = Mesh::default();
-        for j in 0..=n {
-            for i in 0..=n {
-                let pos = Vec3::new(i as f32, j as f32 * 0.8, 0.1 * i as f32);
-                mesh.vertices.push(Vertex {
-                    pos,
-                    normal: Vec3::Z,
-                    eval: pos,
-                });
-            }
-        }
-        let at = |i: u32, j: u32| j * (n + 1) + i;
-        for j in 0..n {
-            for i in 0..n {
-                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-                for v in [[a, b, c], [a, c, d]] {
-                    mesh.elements.push(Element {
-                        v,
-                        object: 0,
-                        patch: 0,
-                    });
-                }
-            }
-        }
-        let [a, b, c] = mesh.elements[7].v;
-        let pos = (mesh.vertices[a as usize].pos + mesh.vertices[b as usize].pos) * 0.5;
-        mesh.vertices.push(Vertex {
-            pos,
-            normal: Vec3::Z,
-            eval: pos,
-        });
-        let m = mesh.vertices.len() as u32 - 1;
-        mesh.elements[7].v = [a, m, c];
-        mesh.elements.push(Element {
-            v: [m, b, c],
-            object: 0,
-            patch: 0,
-        });
+        let mut mesh = crate::quadrature::tests::grid(n);
+        crate::quadrature::tests::split_first_edge(&mut mesh, 7);
         mesh
     }
 
