@@ -22,7 +22,7 @@ use occ_radiosity::mesh::Mesh;
 use occ_radiosity::octree::flat::{FlatOctree, MAX_NAMED_TRIANGLES, NAMED_TRIANGLE_FLOATS};
 use occ_radiosity::overshoot::Acceleration;
 use occ_radiosity::quadrature::MeanRule;
-use occ_radiosity::quadrature::weights::{MeshSupport, element_weights};
+use occ_radiosity::quadrature::weights::Supports;
 use occ_radiosity::solver::{ConvergencePoint, Solver, Until};
 use occ_runtime::remote::Transport;
 use occ_runtime::topology::Shape;
@@ -294,12 +294,15 @@ pub fn solve(
     } else {
         Items::voxels(&flat)
     };
+    // the points each element keeps corners at on the nodes, by the rule it books by
+    let supports = Supports::new(&solver.mesh, solver.config().element_means);
+    let corners_at = supports.at_vertices(solver.mesh.vertices.len());
     let (input, store) = if host_here {
-        host_input(solver, &flat, &items, settings)?
+        host_input(solver, &flat, &items, settings, &corners_at)?
     } else {
         (Vec::new(), None)
     };
-    let capacities = capacities(solver, &flat, &items, settings)?;
+    let capacities = capacities(solver, &flat, &items, settings, &supports, &corners_at)?;
     let shares = store.as_ref().map(|s| s.shares.clone());
     let reads = store.as_ref().map(|s| s.reads.clone());
     let answers = Pipe::default();
@@ -389,12 +392,15 @@ pub fn solve(
 /// sample points (shared by the nodes but the root, when there are others) and of their
 /// element corners times the load tolerance (with room for one more point's corners), beyond
 /// which the controller re-hashes a point to another node, the most patches a node has corners
-/// of (`node_patches`), and the worker tasks and threads a node runs.
+/// of (`node_patches`), and the worker tasks and threads a node runs. `supports` lists the points
+/// each element keeps corners at, `corners_at` how many each point keeps.
 fn capacities(
     solver: &Solver,
     flat: &FlatOctree,
     items: &Items,
     settings: &CarmSettings,
+    supports: &Supports,
+    corners_at: &[usize],
 ) -> anyhow::Result<Vec<(&'static str, usize)>> {
     anyhow::ensure!(
         (1..=MOST_WALKERS).contains(&settings.tasks)
@@ -411,7 +417,6 @@ fn capacities(
     );
     let mesh = &solver.mesh;
     let rule = solver.config().element_means;
-    let corners_at = corners_at_points(mesh, rule);
     let most_at_one = corners_at.iter().copied().max().unwrap_or(0);
     // the nodes that keep sample points: all but the root, when there are others
     let keepers = settings.nodes.saturating_sub(1).max(1);
@@ -445,7 +450,7 @@ fn capacities(
             "NODE.PATCHES",
             node_patches(
                 mesh,
-                rule,
+                (rule, supports, corners_at),
                 settings.nodes,
                 node_points,
                 node_corners,
@@ -540,14 +545,14 @@ fn capacities(
 /// controller stops the run then).
 fn node_patches(
     mesh: &Mesh,
-    rule: MeanRule,
+    (rule, supports, corners_at): (MeanRule, &Supports, &[usize]),
     nodes: usize,
     node_points: usize,
     node_corners: usize,
     adapt: bool,
 ) -> usize {
     let all = mesh.patches.len();
-    let Some(dealt) = deal(mesh, rule, nodes, node_points, node_corners) else {
+    let Some(dealt) = deal(mesh, corners_at, nodes, node_points, node_corners) else {
         return all;
     };
     // The elements go grouped by patch (host_input), so a node's patches come one after another.
@@ -555,18 +560,9 @@ fn node_patches(
     by_patch.sort_by_key(|&e| mesh.elements[e].patch);
     let mut patches = vec![0usize; nodes];
     let mut last = vec![u32::MAX; nodes];
-    let support = (rule == MeanRule::Quadratic).then(|| MeshSupport::new(mesh));
-    let mut weights = Vec::new();
     for &e in &by_patch {
         let patch = mesh.elements[e].patch;
-        match &support {
-            Some(support) => element_weights(support, e as u32, &mut weights),
-            None => {
-                weights.clear();
-                weights.extend(mesh.elements[e].v.map(|v| (v, 0.0)));
-            }
-        }
-        for &(v, _) in &weights {
+        for &v in supports.of(e) {
             let k = dealt.node[v as usize];
             if last[k] != patch {
                 last[k] = patch;
@@ -598,12 +594,12 @@ struct Dealt {
 
 /// The controller's dealing of the mesh's sample points, in order: each to its hash's node
 /// (`owner`), unless that node is full (`node_points` points, or `node_corners` corners with
-/// the point's); then to a re-hash's, and after as many re-hashes as nodes, to the next node
+/// the point's `corners_at`); then to a re-hash's, and after as many re-hashes as nodes, to the next node
 /// with room (never the root when there are others). `None` when no node has room for some
 /// point.
 fn deal(
     mesh: &Mesh,
-    rule: MeanRule,
+    corners_at: &[usize],
     nodes: usize,
     node_points: usize,
     node_corners: usize,
@@ -613,7 +609,7 @@ fn deal(
         node: Vec::with_capacity(mesh.vertices.len()),
         corners: vec![0; nodes],
     };
-    for (v, c) in mesh.vertices.iter().zip(corners_at_points(mesh, rule)) {
+    for (v, &c) in mesh.vertices.iter().zip(corners_at) {
         let pn = [
             v.pos.x, v.pos.y, v.pos.z, v.normal.x, v.normal.y, v.normal.z,
         ];
@@ -677,26 +673,6 @@ fn most_elements_of_one_patch(mesh: &Mesh) -> usize {
         per_patch[e.patch as usize] += 1;
     }
     per_patch.into_iter().max().unwrap_or(0)
-}
-
-/// The element corners the controller counts at each sample point: by the corners' average one
-/// per element it is a corner of; by the quadratic rule one per element whose support it is in
-/// (programs/README.md, "Quadratic booking").
-fn corners_at_points(mesh: &Mesh, rule: MeanRule) -> Vec<usize> {
-    match rule {
-        MeanRule::Linear => {
-            let mut out = vec![0; mesh.vertices.len()];
-            for e in &mesh.elements {
-                for v in e.v {
-                    out[v as usize] += 1;
-                }
-            }
-            out
-        }
-        MeanRule::Quadratic => (MeshSupport::new(mesh).entries_at_vertices().into_iter())
-            .map(|c| c as usize)
-            .collect(),
-    }
 }
 
 /// `program` with the value of each `VAL INT NAME IS n:` line whose name `capacities` lists
@@ -785,6 +761,7 @@ fn host_input(
     flat: &FlatOctree,
     items: &Items,
     settings: &CarmSettings,
+    corners_at: &[usize],
 ) -> anyhow::Result<(Vec<u8>, Option<Store>)> {
     let config = solver.config();
     let (scene, mesh) = (solver.scene, &solver.mesh);
@@ -929,8 +906,7 @@ fn host_input(
         w.int(back.len() as i32);
         back.iter().for_each(|&x| w.real32(x));
     }
-    let rule = config.element_means;
-    for (v, c) in mesh.vertices.iter().zip(corners_at_points(mesh, rule)) {
+    for (v, &c) in mesh.vertices.iter().zip(corners_at) {
         w.vec3(v.pos);
         w.vec3(v.normal);
         w.vec3(v.eval);

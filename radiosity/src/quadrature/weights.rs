@@ -9,7 +9,7 @@
 
 use glam::Vec3;
 
-use super::{Stencil, stencil};
+use super::{MeanRule, Stencil, stencil};
 use crate::geom::Tri;
 use crate::mesh::Mesh;
 
@@ -87,16 +87,53 @@ impl<'a> MeshSupport<'a> {
         let (first, list) = elements_around(mesh.vertices.len(), mesh.elements.iter().map(|e| e.v));
         MeshSupport { mesh, first, list }
     }
+}
 
-    /// How many elements' supports each vertex is in: the element corners a node program
-    /// keeps at it by the quadratic rule.
-    pub fn entries_at_vertices(&self) -> Vec<u32> {
-        let mut count = vec![0u32; self.mesh.vertices.len()];
-        let mut out = Vec::new();
-        for e in 0..self.mesh.elements.len() as u32 {
-            element_weights(self, e, &mut out);
-            out.iter().for_each(|&(v, _)| count[v as usize] += 1);
+/// The vertices each element's integral weighs by a rule, as lists: element `e`'s are
+/// `points[first[e] .. first[e + 1]]`, its corners first. By the corners' average its three
+/// corners; by the quadratic rule its support. A node program keeps an element corner at each
+/// (carm.occ: programs/README.md, "Quadratic booking").
+pub struct Supports {
+    first: Vec<usize>,
+    points: Vec<u32>,
+}
+
+impl Supports {
+    /// Every element's of `mesh` by `rule`.
+    pub fn new(mesh: &Mesh, rule: MeanRule) -> Supports {
+        let mut supports = Supports {
+            first: vec![0],
+            points: Vec::new(),
+        };
+        match rule {
+            MeanRule::Linear => {
+                for e in &mesh.elements {
+                    supports.points.extend(e.v);
+                    supports.first.push(supports.points.len());
+                }
+            }
+            MeanRule::Quadratic => {
+                let support = MeshSupport::new(mesh);
+                let mut out = Vec::new();
+                for e in 0..mesh.elements.len() as u32 {
+                    element_weights(&support, e, &mut out);
+                    supports.points.extend(out.iter().map(|&(v, _)| v));
+                    supports.first.push(supports.points.len());
+                }
+            }
         }
+        supports
+    }
+
+    /// Element `e`'s vertices.
+    pub fn of(&self, e: usize) -> &[u32] {
+        &self.points[self.first[e]..self.first[e + 1]]
+    }
+
+    /// How many elements weigh each of `vertices` vertices: the corners kept at it.
+    pub fn at_vertices(&self, vertices: usize) -> Vec<usize> {
+        let mut count = vec![0; vertices];
+        self.points.iter().for_each(|&v| count[v as usize] += 1);
         count
     }
 }
@@ -198,19 +235,29 @@ mod tests {
     }
 
     #[test]
-    fn the_entries_at_the_vertices_count_every_support() {
+    fn the_supports_count_every_element_s_weights() {
         let mesh = mesh(4);
         let support = MeshSupport::new(&mesh);
-        let counts = support.entries_at_vertices();
+        let quadratic = Supports::new(&mesh, MeanRule::Quadratic);
         let mut out = Vec::new();
-        let total: usize = (0..mesh.elements.len() as u32)
-            .map(|e| {
-                element_weights(&support, e, &mut out);
-                out.len()
-            })
-            .sum();
-        assert_eq!(counts.iter().map(|&c| c as usize).sum::<usize>(), total);
+        let mut total = 0;
+        for e in 0..mesh.elements.len() {
+            element_weights(&support, e as u32, &mut out);
+            assert!(out.iter().map(|w| w.0).eq(quadratic.of(e).iter().copied()));
+            total += out.len();
+        }
+        let counts = quadratic.at_vertices(mesh.vertices.len());
+        assert_eq!(counts.iter().sum::<usize>(), total);
         // an interior element of a regular grid reaches the twelve vertices around its corners
         assert!(total > 9 * mesh.elements.len(), "{total}");
+        let linear = Supports::new(&mesh, MeanRule::Linear);
+        assert_eq!(linear.of(7), mesh.elements[7].v);
+        assert_eq!(
+            linear
+                .at_vertices(mesh.vertices.len())
+                .iter()
+                .sum::<usize>(),
+            3 * mesh.elements.len()
+        );
     }
 }
