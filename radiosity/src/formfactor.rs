@@ -20,7 +20,7 @@
 
 use glam::Vec3;
 
-use crate::geom::{Tri, clip_polygon};
+use crate::geom::{Tri, clip_polygon, clip_polygon_into};
 use crate::octree::{Octree, Traversal};
 use crate::rng::Pcg32;
 
@@ -87,7 +87,18 @@ pub struct FormFactor {
 /// convex planar polygon `poly`, ignoring occlusion; the part of the polygon below the receiver's
 /// horizon is clipped away. Orientation of `poly` does not matter.
 pub fn point_polygon(p: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
-    let clipped = clip_polygon(poly, p, n);
+    const SMALL: usize = 8;
+    if poly.len() <= SMALL {
+        let mut clipped = [Vec3::ZERO; SMALL + 1];
+        let k = clip_polygon_into(poly, p, n, &mut clipped);
+        clipped_polygon(p, n, &clipped[..k])
+    } else {
+        clipped_polygon(p, n, &clip_polygon(poly, p, n))
+    }
+}
+
+/// [`point_polygon`] of a polygon wholly above the receiver's horizon (Lambert's contour sum).
+fn clipped_polygon(p: Vec3, n: Vec3, clipped: &[Vec3]) -> f32 {
     if clipped.len() < 3 {
         return 0.0;
     }

@@ -165,17 +165,33 @@ pub fn ray_triangle(o: Vec3, d: Vec3, v0: Vec3, e1: Vec3, e2: Vec3) -> Option<f3
 /// Clips a convex planar polygon to the half-space `n·(x - p) >= 0` (Sutherland–Hodgman).
 pub fn clip_polygon(poly: &[Vec3], p: Vec3, n: Vec3) -> Vec<Vec3> {
     let mut out = Vec::with_capacity(poly.len() + 1);
+    clip_each(poly, p, n, |x| out.push(x));
+    out
+}
+
+/// [`clip_polygon`] into `out`, which must hold `poly.len() + 1` points; returns how many it
+/// holds (no allocation).
+pub fn clip_polygon_into(poly: &[Vec3], p: Vec3, n: Vec3, out: &mut [Vec3]) -> usize {
+    let mut k = 0;
+    clip_each(poly, p, n, |x| {
+        out[k] = x;
+        k += 1;
+    });
+    k
+}
+
+/// The vertices of [`clip_polygon`], in order, each passed to `push`.
+fn clip_each(poly: &[Vec3], p: Vec3, n: Vec3, mut push: impl FnMut(Vec3)) {
     for i in 0..poly.len() {
         let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
         let (da, db) = (n.dot(a - p), n.dot(b - p));
         if da >= 0.0 {
-            out.push(a);
+            push(a);
         }
         if (da >= 0.0) != (db >= 0.0) {
-            out.push(a + (b - a) * (da / (da - db)));
+            push(a + (b - a) * (da / (da - db)));
         }
     }
-    out
 }
 
 /// Returns the part of triangle `b`'s intersection with the plane of triangle `a` that lies
