@@ -8,6 +8,8 @@
 //! - a shooting patch's density grid (`SourceDensity::of_parts`, 24 × 24 cells) over 64 and
 //!   256 elements, beside the search it replaced (the last cell's element, else every
 //!   element's closest point);
+//! - the analytic form near a source whose power lies away from the receivers (a face at the
+//!   foot of a dark strip of floor, `balance_weights`), beside the same source uniform;
 //! - time to a converged Cornell box (reference solver; rayon uses the pool it is given, see
 //!   the `solve` group note).
 
@@ -18,7 +20,7 @@ use glam::Vec3;
 use occ_radiosity::formfactor::{FormFactorConfig, SourceDensity};
 use occ_radiosity::geom::Tri;
 use occ_radiosity::intrinsics::RAY_FLOATS;
-use occ_radiosity::kernels::{SamplePoint, shoot_batch};
+use occ_radiosity::kernels::{SamplePoint, shoot_batch, shoot_batch_visibility};
 use occ_radiosity::mesh::{Mesh, MeshConfig};
 use occ_radiosity::octree::flat::{CURSOR_INTS, START};
 use occ_radiosity::octree::{Octree, OctreeConfig, Traversal};
@@ -281,12 +283,53 @@ fn source_density(c: &mut Criterion) {
     group.finish();
 }
 
+/// The analytic form from a floor triangle to 64 receivers on a face standing at its edge
+/// (heights 0.005 to 0.5 of the triangle's side), no occluder: with the floor dark within 0.2
+/// of the face (the balanced analytic form, its `W` integral of the density) and uniform.
+fn balanced(c: &mut Criterion) {
+    let patch = Tri::new(
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(1.0, 0.0, 0.0),
+    );
+    let dark = SourceDensity::new(&patch, 24, |x| if x.z < 0.2 { 0.02 } else { 1.0 })
+        .expect("not uniform");
+    let points: Vec<SamplePoint> = (0..64)
+        .map(|k| {
+            let p = [
+                0.05 + 0.9 * (k % 8) as f32 / 7.0,
+                0.005 * 100f32.powf((k / 8) as f32 / 7.0),
+                -1e-3,
+            ];
+            SamplePoint {
+                pos: p,
+                normal: [0.0, 0.0, 1.0],
+                eval: p,
+            }
+        })
+        .collect();
+    let config = FormFactorConfig::default();
+    let mut out = vec![0.0; points.len()];
+    let mut group = c.benchmark_group("analytic_near");
+    group.throughput(Throughput::Elements(points.len() as u64));
+    for (name, density) in [("dark_strip", Some(&dark)), ("uniform", None)] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let points = black_box(&points);
+                shoot_batch_visibility(None, &patch, density, points, &config, 1, &mut out)
+            })
+        });
+    }
+    group.finish();
+}
+
 criterion_group!(
     benches,
     occlusion,
     walk,
     form_factors,
     source_density,
+    balanced,
     solve
 );
 criterion_main!(benches);
