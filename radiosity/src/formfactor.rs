@@ -963,8 +963,10 @@ fn balance_weights<const N: usize>(
     let (cu, cv) = square_point(src, nearest);
     let cell = |x: f32| ((x * g as f32) as u32).min(g - 1);
     let d0 = densities.cells[(cell(cu) * g + cell(cv)) as usize];
-    // ∫ k over the source, in the unit of the rules (a cell's area)
-    let whole = std::f32::consts::PI * (g * g) as f32 / area * point_polygon(p, n, &src.v);
+    // a form factor in the unit of the rules (the kernel's integral over a cell's area)
+    let unit = std::f32::consts::PI * (g * g) as f32 / area;
+    // ∫ k over the source
+    let whole = unit * point_polygon(p, n, &src.v);
     if whole <= 0.0 {
         return;
     }
@@ -992,15 +994,12 @@ fn balance_weights<const N: usize>(
             })
             .sum::<f32>()
     };
-    // the corner `(i, j)` of the cell grid, as [`Tri::sample`] warps it
-    let corner = |i: u32, j: u32| {
-        let su = (i as f32 / g as f32).sqrt();
-        v0 * (1.0 - su) + v2 * su + (v1 - v2) * (su * j as f32 / g as f32)
-    };
-    // the exact integral over cell (i, j), in the unit of its area
+    // the exact integral over cell (i, j), from its corners as [`Tri::sample`] warps them (the
+    // warp keeps a cell's edges straight)
     let exact = |i: u32, j: u32| {
+        let corner = |i: u32, j: u32| src.sample(i as f32 / g as f32, j as f32 / g as f32);
         let quad = [(0, 0), (1, 0), (1, 1), (0, 1)].map(|(a, b)| corner(i + a, j + b));
-        std::f32::consts::PI * (g * g) as f32 / area * point_polygon(p, n, &quad)
+        unit * point_polygon(p, n, &quad)
     };
     // (each density takes the rules its own cells choose, so that a density in a set reads
     // what it reads alone, to the bit)
