@@ -1078,9 +1078,11 @@ impl<'a> Solver<'a> {
     }
 
     /// Returns the error of the objects' means against the reference ([`Errors::of`]); `None`
-    /// without a reference.
+    /// without a reference, and then the objects' means (which [`Solver::record`] would
+    /// otherwise work out at every shot, for nothing) are not worked out.
     pub fn errors(&self) -> Option<Errors> {
-        Errors::of(&self.object_means(), self.reference.as_ref()?)
+        let reference = self.reference.as_ref()?;
+        Errors::of(&self.object_means(), reference)
     }
 
     /// Returns the area-weighted RMS relative error against the reference ([`Errors::rms`]).
