@@ -109,11 +109,57 @@ fn clipped_polygon(p: Vec3, n: Vec3, clipped: &[Vec3]) -> f32 {
         let c = a.cross(b);
         let len = c.length();
         if len > 0.0 {
-            let gamma = len.atan2(a.dot(b));
+            let gamma = angle(len, a.dot(b));
             sum += gamma * n.as_dvec3().dot(c) / len;
         }
     }
     (sum.abs() / (2.0 * std::f64::consts::PI)) as f32
+}
+
+/// The angle in `[0, π]` between two vectors from `|a × b|` (`sin`, positive) and `a · b`
+/// (`cos`): `atan2(sin, cos)` to within a few units in the last place, in about a fifth of the
+/// instructions of the C library's (the contour sum takes one per edge, and the analytic form
+/// one contour sum or more per near receiver). The reduction and rational approximation are
+/// those of Moshier's Cephes `atan` (peak relative error 2.6e-18 on `[0, 0.66]`).
+#[inline]
+fn angle(sin: f64, cos: f64) -> f64 {
+    #[allow(clippy::excessive_precision)]
+    const P: [f64; 5] = [
+        -8.750_608_600_031_904_122_785e-1,
+        -1.615_753_718_733_365_076_637e1,
+        -7.500_855_792_314_704_667_340e1,
+        -1.228_866_684_490_136_173_410e2,
+        -6.485_021_904_942_025_371_773e1,
+    ];
+    #[allow(clippy::excessive_precision)]
+    const Q: [f64; 5] = [
+        2.485_846_490_142_306_297_962e1,
+        1.650_270_098_316_988_542_046e2,
+        4.328_810_604_912_902_668_951e2,
+        4.853_903_996_359_136_964_868e2,
+        1.945_506_571_482_613_964_425e2,
+    ];
+    // π/2 and π/4 to more bits than an f64 holds: the part past the last place
+    #[allow(clippy::excessive_precision)]
+    const MORE_BITS: f64 = 6.123_233_995_736_765_886_130e-17;
+    // tan(3π/8)
+    #[allow(clippy::excessive_precision)]
+    const TAN_3PI_8: f64 = 2.414_213_562_373_095_048_80;
+    use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+    // atan(sin / |cos|), its argument brought into [−0.42, 0.66]
+    let along = cos.abs();
+    let (x, base, more) = if sin > TAN_3PI_8 * along {
+        (-along / sin, FRAC_PI_2, MORE_BITS)
+    } else if sin > 0.66 * along {
+        ((sin - along) / (sin + along), FRAC_PI_4, 0.5 * MORE_BITS)
+    } else {
+        (sin / along, 0.0, 0.0)
+    };
+    let z = x * x;
+    let p = (((P[0] * z + P[1]) * z + P[2]) * z + P[3]) * z + P[4];
+    let q = ((((z + Q[0]) * z + Q[1]) * z + Q[2]) * z + Q[3]) * z + Q[4];
+    let acute = base + (x + x * z * p / q + more);
+    if cos < 0.0 { PI - acute } else { acute }
 }
 
 /// Returns the stratified sample points of a source triangle for `m` rays (a jittered
@@ -1214,6 +1260,39 @@ mod tests {
         let c = Vec3::new(x1, h, z1);
         let d = Vec3::new(x0, h, z1);
         [Tri::new(a, b, c), Tri::new(a, c, d)]
+    }
+
+    #[test]
+    fn angle_is_the_library_atan2() {
+        let mut rng = Pcg32::new(7, 1);
+        let mut worst = 0.0f64;
+        let mut check = |sin: f64, cos: f64| {
+            let (got, want) = (angle(sin, cos), sin.atan2(cos));
+            worst = worst.max((got - want).abs() / want.max(f64::MIN_POSITIVE));
+        };
+        // the reduction's boundaries, the axes, and vectors of every direction and scale
+        for (sin, cos) in [
+            (1.0, 0.0),
+            (1.0, -0.0),
+            (1e-300, 1.0),
+            (1e-300, -1.0),
+            (1.0, 1e300),
+        ] {
+            check(sin, cos);
+        }
+        for t in [0.66f64, 2.414_213_562_373_095, 1.0] {
+            for cos in [1.0, -1.0] {
+                for ulps in -2..=2 {
+                    check(f64::from_bits(t.to_bits().wrapping_add_signed(ulps)), cos);
+                }
+            }
+        }
+        for _ in 0..200_000 {
+            let theta = rng.next_f32() as f64 * std::f64::consts::PI;
+            let scale = 10f64.powi((rng.next_f32() * 12.0) as i32 - 6);
+            check(theta.sin().abs() * scale, theta.cos() * scale);
+        }
+        assert!(worst < 4.0 * f64::EPSILON, "worst relative error {worst:e}");
     }
 
     #[test]
