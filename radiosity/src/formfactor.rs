@@ -18,7 +18,7 @@
 //!
 //! Sources are one-sided: a receiver behind the source's plane gets zero.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::geom::{Tri, clip_polygon, clip_polygon_into};
 use crate::octree::{Octree, Traversal};
@@ -348,6 +348,10 @@ pub struct DensitySet<const N: usize> {
     /// mean, row by row (`balance_weights` takes a block far from the receiver so).
     block: u32,
     blocks: Vec<[f32; N]>,
+    /// The blocks' means again, density by density, each row of blocks padded with zeros to
+    /// `lanes` (a multiple of 4), for `balance_weights` to take the far ones four at a time.
+    lanes: u32,
+    block_lanes: [Vec<f32>; N],
     /// Whether each block's cells hold one value, in each density.
     flat: Vec<[bool; N]>,
 }
@@ -419,13 +423,24 @@ impl<const N: usize> DensitySet<N> {
             })
             .collect::<Vec<_>>();
         let flat = blocks.iter().map(|b| b.1).collect();
-        let blocks = blocks.into_iter().map(|b| b.0).collect();
+        let blocks: Vec<[f32; N]> = blocks.into_iter().map(|b| b.0).collect();
+        let lanes = side.div_ceil(4) * 4;
+        let block_lanes = std::array::from_fn(|c| {
+            let mut lane = vec![0.0; (side * lanes) as usize];
+            for (b, mean) in blocks.iter().enumerate() {
+                let (bi, bj) = (b as u32 / side, b as u32 % side);
+                lane[(bi * lanes + bj) as usize] = mean[c];
+            }
+            lane
+        });
         DensitySet {
             g,
             cells,
             uniform: densities.map(|d| d.is_none()),
             block,
             blocks,
+            lanes,
+            block_lanes,
             flat,
         }
     }
@@ -1060,61 +1075,81 @@ fn balance_weights<const N: usize>(
     let squared = |radii: f32| radii * radii;
     let (near_block2, cell_block2) = (squared(NEAR_BLOCK), squared(CELL_BLOCK));
     let (exact2, near2, gauss2) = (squared(EXACT_CELL), squared(NEAR_CELL), squared(GAUSS_CELL));
+    // The far blocks (most of them) four at a time, as `Σ k mean` per density and `Σ k`, in
+    // the unit of a block's area; the near ones, as their lanes show them, one by one.
+    let (mut far_km, mut far_k) = ([Vec4::ZERO; N], Vec4::ZERO);
+    let lanes = densities.lanes;
+    let steps = Vec4::new(0.5, 1.5, 2.5, 3.5);
     for bi in 0..blocks {
         let (row, r2) = (rows.at(mid(bi, blocks)), radius2(bi, blocks));
+        let far2 = Vec4::splat(near_block2 * r2);
         // the block row's rows of cells, and their radii², once a block of it is taken so
         let mut cell_rows = None;
-        for bj in 0..blocks {
-            let (v, b) = (mid(bj, blocks), (bi * blocks + bj) as usize);
-            let (d2, mean) = (row.distance2(v), densities.blocks[b]);
-            if d2 >= near_block2 * r2 {
-                add(block_area * row.kernel(v), mean, [true; N]);
-                continue;
+        for bj0 in (0..blocks).step_by(4) {
+            let v = (Vec4::splat(bj0 as f32) + steps) / blocks as f32;
+            let (k, d2) = row.kernels_and_distances2(v);
+            let inside = Vec4::new(0.0, 1.0, 2.0, 3.0).cmplt(Vec4::splat((blocks - bj0) as f32));
+            let is_far = d2.cmpge(far2) & inside;
+            let k_far = Vec4::select(is_far, k, Vec4::ZERO);
+            let at = (bi * lanes + bj0) as usize;
+            for (km, means) in far_km.iter_mut().zip(&densities.block_lanes) {
+                *km += k_far * Vec4::from_slice(&means[at..at + 4]);
             }
-            // the densities with nothing to add (one value throughout, the peak's), those to
-            // take the block at once by (a block of one cell is taken as a cell), and by cell
-            let flat = densities.flat[b];
-            let done: [bool; N] = std::array::from_fn(|c| flat[c] && mean[c] == d0[c]);
-            let whole_block = d2 >= cell_block2 * r2;
-            let at_once = std::array::from_fn(|c| !done[c] && (whole_block || (flat[c] && f > 1)));
-            let by_cell: [bool; N] = std::array::from_fn(|c| !done[c] && !at_once[c]);
-            if at_once.contains(&true) {
-                add(block_area * gauss(bi, bj, blocks, GAUSS_2), mean, at_once);
-            }
-            if !by_cell.contains(&true) {
-                continue;
-            }
-            let cell_rows = cell_rows.get_or_insert_with(|| {
-                std::array::from_fn::<_, { BLOCK as usize }, _>(|di| {
-                    // (rows past `f` go unused; clamped, they stay in the grid)
-                    let i = (bi * f + di as u32).min(g - 1);
-                    (i, rows.at(mid(i, g)), radius2(i, g))
-                })
-            });
-            for &(i, ref row, r2) in &cell_rows[..f as usize] {
-                for j in bj * f..(bj + 1) * f {
-                    let d = densities.cells[(i * g + j) as usize];
-                    if d == d0 {
-                        continue;
+            far_k += k_far;
+            let mut near = (!is_far & inside).bitmask();
+            while near != 0 {
+                let lane = near.trailing_zeros();
+                near &= near - 1;
+                let bj = bj0 + lane;
+                let (b, d2) = ((bi * blocks + bj) as usize, d2[lane as usize]);
+                let mean = densities.blocks[b];
+                // the densities with nothing to add (one value throughout, the peak's), those to
+                // take the block at once by (a block of one cell is taken as a cell), and by cell
+                let flat = densities.flat[b];
+                let done: [bool; N] = std::array::from_fn(|c| flat[c] && mean[c] == d0[c]);
+                let whole_block = d2 >= cell_block2 * r2;
+                let at_once =
+                    std::array::from_fn(|c| !done[c] && (whole_block || (flat[c] && f > 1)));
+                let by_cell: [bool; N] = std::array::from_fn(|c| !done[c] && !at_once[c]);
+                if at_once.contains(&true) {
+                    add(block_area * gauss(bi, bj, blocks, GAUSS_2), mean, at_once);
+                }
+                if !by_cell.contains(&true) {
+                    continue;
+                }
+                let cell_rows = cell_rows.get_or_insert_with(|| {
+                    std::array::from_fn::<_, { BLOCK as usize }, _>(|di| {
+                        // (rows past `f` go unused; clamped, they stay in the grid)
+                        let i = (bi * f + di as u32).min(g - 1);
+                        (i, rows.at(mid(i, g)), radius2(i, g))
+                    })
+                });
+                for &(i, ref row, r2) in &cell_rows[..f as usize] {
+                    for j in bj * f..(bj + 1) * f {
+                        let d = densities.cells[(i * g + j) as usize];
+                        if d == d0 {
+                            continue;
+                        }
+                        let v = mid(j, g);
+                        let d2 = row.distance2(v);
+                        let k = if d2 < exact2 * r2 {
+                            exact(i, j)
+                        } else if d2 < near2 * r2 {
+                            gauss(i, j, g, GAUSS_4)
+                        } else if d2 < gauss2 * r2 {
+                            gauss(i, j, g, GAUSS_2)
+                        } else {
+                            row.kernel(v)
+                        };
+                        add(k, d, by_cell);
                     }
-                    let v = mid(j, g);
-                    let d2 = row.distance2(v);
-                    let k = if d2 < exact2 * r2 {
-                        exact(i, j)
-                    } else if d2 < near2 * r2 {
-                        gauss(i, j, g, GAUSS_4)
-                    } else if d2 < gauss2 * r2 {
-                        gauss(i, j, g, GAUSS_2)
-                    } else {
-                        row.kernel(v)
-                    };
-                    add(k, d, by_cell);
                 }
             }
         }
     }
     for j in (0..N).filter(|&j| !uniform[j]) {
-        let mean = (d0[j] + integral[j] / whole).max(0.0);
+        let far = far_km[j].element_sum() - d0[j] * far_k.element_sum();
+        let mean = (d0[j] + (integral[j] + block_area * far) / whole).max(0.0);
         if kw_sum[j] > 0.0 {
             let scale = mean * k_sum / kw_sum[j];
             weights.iter_mut().for_each(|w| w[j] *= scale);
@@ -1198,6 +1233,19 @@ impl Row<'_> {
         } else {
             0.0
         }
+    }
+
+    /// [`Row::kernel`] and [`Row::distance2`] at four `v` at once.
+    #[inline]
+    fn kernels_and_distances2(&self, v: Vec4) -> (Vec4, Vec4) {
+        let r = self.rows;
+        let t = v * self.su;
+        let c1 = Vec4::splat(self.na) + t * r.nb;
+        let c2 = -(Vec4::splat(self.nsa) + t * r.nsb);
+        let len2 = Vec4::splat(self.aa) + t * (Vec4::splat(self.ab2) + t * r.bb);
+        let k = c1 * c2 / (len2 * len2).max(Vec4::splat(f32::MIN_POSITIVE));
+        let seen = c1.cmpgt(Vec4::ZERO) & c2.cmpgt(Vec4::ZERO);
+        (Vec4::select(seen, k, Vec4::ZERO), len2)
     }
 
     /// The squared distance from the receiver to the point at `v`.
