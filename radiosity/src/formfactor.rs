@@ -293,14 +293,20 @@ impl<'t> Part<'t> {
     /// samples fall in the strip, and with none the visible share is taken as 0 (a leg's face
     /// under the table top's 5 cm overhang got 0 for 0.49 on most seeds; radiosity/
     /// REFERENCES.md, "A row of points beside concave creases").
-    fn of(p: Vec3, n: Vec3, src: &'t Tri, m: u32, config: &FormFactorConfig) -> Part<'t> {
+    fn of(
+        (p, n): (Vec3, Vec3),
+        source: &Facing<'t>,
+        m: u32,
+        d_min2: f32,
+        config: &FormFactorConfig,
+    ) -> Part<'t> {
+        let src = source.src;
         let height = src.v.map(|v| n.dot(v - p));
         if height.iter().all(|&h| h > 0.0) {
             return Part::Whole(src);
         }
         let k = sample_grid(m);
-        let d_min2 = (src.closest_point(p) - p).length_squared();
-        if !is_analytic(src.area(), (k * k) as usize, d_min2, config) {
+        if !is_analytic(source.area, (k * k) as usize, d_min2, config) {
             return Part::Whole(src);
         }
         // the corners above the horizon and where the edges cross it, in order (as
@@ -639,8 +645,7 @@ impl<C: AsRef<[f32]>> SourceDensity<C> {
 /// thousandth of their shortest edge inside it ([`crate::mesh::Vertex::eval`]), far more than
 /// rounding: a floor point at a wall's foot still sees the wall.)
 pub fn faces(p: Vec3, n: Vec3, src: &Tri) -> bool {
-    let rounding = 8.0 * f32::EPSILON * (p.abs().max_element() + src.v[0].abs().max_element());
-    src.normal().dot(p - src.v[0]) > rounding && src.v.iter().any(|v| n.dot(*v - p) > 0.0)
+    Facing::new(src).faced_by(p, n)
 }
 
 /// Shadow rays the receiver `(p, n)` casts to the source `src`: none when it does not face it
@@ -649,18 +654,13 @@ pub fn faces(p: Vec3, n: Vec3, src: &Tri) -> bool {
 /// its horizon; else [`FormFactorConfig::rays`]. The solver's kernels and
 /// `RAD.RECEIVER.SAMPLES` ask this.
 pub fn receiver_rays(p: Vec3, n: Vec3, src: &Tri, config: &FormFactorConfig) -> u32 {
-    if !faces(p, n, src) {
-        return 0;
-    }
-    let near2 = NEAR_FIELD * NEAR_FIELD * src.area();
-    let far = (1..config.rays).contains(&config.far_rays)
-        && src.v.iter().all(|v| n.dot(*v - p) > 0.0)
-        && (src.closest_point(p) - p).length_squared() >= near2;
-    if far { config.far_rays } else { config.rays }
+    Facing::new(src)
+        .rays(p, n, config)
+        .map_or(0, |(rays, _)| rays)
 }
 
-/// Draws the weighted samples of `src` ([`source_samples_weighted`]) that the receiver `(p, n)`
-/// casts its rays to, [`receiver_rays`] of them (rounded up to a square); none when it does not
+/// Draws the weighted samples of the `source` ([`source_samples_weighted`]; its normal and
+/// area worked out once for a batch's receivers) that the receiver `(p, n)` casts its rays to, [`receiver_rays`] of them (rounded up to a square); none when it does not
 /// face the source. Every receiver owns a slot of `2k²` numbers of `rng`, `k` =
 /// [`sample_grid`]`(config.rays)`, draws from its start and leaves `rng` at the next slot, so
 /// the receivers of a batch draw from one generator in order and a node holding one of them
@@ -668,7 +668,7 @@ pub fn receiver_rays(p: Vec3, n: Vec3, src: &Tri, config: &FormFactorConfig) -> 
 /// weights are balanced (`balance_weights`). Returns the rays.
 pub fn receiver_samples<C: AsRef<[f32]>>(
     receiver: (Vec3, Vec3),
-    src: &Tri,
+    source: &Facing,
     config: &FormFactorConfig,
     density: Option<&SourceDensity<C>>,
     rng: &mut Pcg32,
@@ -676,20 +676,24 @@ pub fn receiver_samples<C: AsRef<[f32]>>(
     weights: &mut Vec<f32>,
 ) -> u32 {
     weights.clear();
-    let rays = receiver_slot(receiver, src, config, rng, out, |rays, rng, out| {
-        let part = Part::of(receiver.0, receiver.1, src, rays, config);
-        part_samples_weighted(&part, rays, density, rng, out, weights)
-    });
+    let slot = receiver_slot(
+        receiver,
+        source,
+        config,
+        rng,
+        out,
+        |rays, d_min2, rng, out| {
+            let part = Part::of(receiver, source, rays, d_min2, config);
+            part_samples_weighted(&part, rays, density, rng, out, weights)
+        },
+    );
+    let Some((rays, nearest)) = slot else {
+        return 0;
+    };
     if let Some(d) = density {
         let (planes, _) = weights.as_chunks_mut::<1>();
-        balance_weights(
-            receiver,
-            src,
-            out,
-            planes,
-            &DensitySet::new([Some(d)]),
-            config,
-        );
+        let densities = DensitySet::new([Some(d)]);
+        balance_weights(receiver, source, nearest, out, planes, &densities, config);
     }
     rays
 }
@@ -698,7 +702,7 @@ pub fn receiver_samples<C: AsRef<[f32]>>(
 /// ([`source_samples_sets`]).
 pub fn receiver_samples_sets<const N: usize>(
     receiver: (Vec3, Vec3),
-    src: &Tri,
+    source: &Facing,
     config: &FormFactorConfig,
     densities: &DensitySet<N>,
     rng: &mut Pcg32,
@@ -706,34 +710,45 @@ pub fn receiver_samples_sets<const N: usize>(
     weights: &mut Vec<[f32; N]>,
 ) -> u32 {
     weights.clear();
-    let rays = receiver_slot(receiver, src, config, rng, out, |rays, rng, out| {
-        let part = Part::of(receiver.0, receiver.1, src, rays, config);
-        part_samples_sets(&part, rays, densities, rng, out, weights)
-    });
-    balance_weights(receiver, src, out, weights, densities, config);
+    let slot = receiver_slot(
+        receiver,
+        source,
+        config,
+        rng,
+        out,
+        |rays, d_min2, rng, out| {
+            let part = Part::of(receiver, source, rays, d_min2, config);
+            part_samples_sets(&part, rays, densities, rng, out, weights)
+        },
+    );
+    let Some((rays, nearest)) = slot else {
+        return 0;
+    };
+    balance_weights(receiver, source, nearest, out, weights, densities, config);
     rays
 }
 
-/// The receiver's slot of `rng` ([`receiver_samples`]): `draw(rays, rng, out)` takes its
-/// samples from the slot's start, and `rng` is left at the next slot.
+/// The receiver's slot of `rng` ([`receiver_samples`]): `draw(rays, d_min², rng, out)` takes
+/// its samples from the slot's start (`d_min²` the squared distance to the source's point
+/// nearest the receiver), and `rng` is left at the next slot. Returns the rays and that point,
+/// or `None` where the receiver does not face the source.
 fn receiver_slot(
     (p, n): (Vec3, Vec3),
-    src: &Tri,
+    source: &Facing,
     config: &FormFactorConfig,
     rng: &mut Pcg32,
     out: &mut Vec<Vec3>,
-    draw: impl FnOnce(u32, &mut Pcg32, &mut Vec<Vec3>),
-) -> u32 {
+    draw: impl FnOnce(u32, f32, &mut Pcg32, &mut Vec<Vec3>),
+) -> Option<(u32, Vec3)> {
     let slot = 2 * u64::from(sample_grid(config.rays)).pow(2);
-    let rays = receiver_rays(p, n, src, config);
-    if rays == 0 {
+    let Some((rays, nearest)) = source.rays(p, n, config) else {
         out.clear();
         rng.advance(slot);
-        return 0;
-    }
-    draw(rays, rng, out);
+        return None;
+    };
+    draw(rays, (nearest - p).length_squared(), rng, out);
     rng.advance(slot - 2 * out.len() as u64);
-    rays
+    Some((rays, nearest))
 }
 
 /// Computes the form factor from the receiver `(p, n)` to source triangle `src` using the
@@ -856,6 +871,27 @@ impl<'t> Facing<'t> {
             area: src.area(),
         }
     }
+
+    /// [`faces`]: whether the receiver `(p, n)` can see any of the source.
+    fn faced_by(&self, p: Vec3, n: Vec3) -> bool {
+        let v = &self.src.v;
+        let rounding = 8.0 * f32::EPSILON * (p.abs().max_element() + v[0].abs().max_element());
+        self.normal.dot(p - v[0]) > rounding && v.iter().any(|v| n.dot(*v - p) > 0.0)
+    }
+
+    /// [`receiver_rays`] of the receiver `(p, n)` and the source's point nearest it, or `None`
+    /// where it does not face the source.
+    fn rays(&self, p: Vec3, n: Vec3, config: &FormFactorConfig) -> Option<(u32, Vec3)> {
+        if !self.faced_by(p, n) {
+            return None;
+        }
+        let nearest = self.src.closest_point(p);
+        let near2 = NEAR_FIELD * NEAR_FIELD * self.area;
+        let far = (1..config.rays).contains(&config.far_rays)
+            && self.src.v.iter().all(|v| n.dot(*v - p) > 0.0)
+            && (nearest - p).length_squared() >= near2;
+        Some((if far { config.far_rays } else { config.rays }, nearest))
+    }
 }
 
 /// [`form_factor_sets`] for a receiver known to face the source ([`faces`]; as one that
@@ -963,11 +999,11 @@ fn point_kernel(p: Vec3, n: Vec3, ns: Vec3, x: Vec3) -> Option<f32> {
 ///
 /// Only receivers within [`BALANCE_FIELD`] of the source that take the analytic form are
 /// balanced (farther, the kernel is nearly flat over the source and the ratio nearly
-/// unbiased). `weights[k][j]` is sample `k`'s weight in density `j` of `densities` (a uniform
-/// one is left alone). `W` is worked out as `d₀ + ∫ k (d − d₀) / ∫ k`, `d₀` the densities at
-/// the kernel's peak (the source's point nearest the receiver) and `∫ k` exact (Lambert's
-/// contour sum), so that where the density about the peak is `d₀` the rule's error there,
-/// where the kernel changes fastest, counts for nothing. The integral goes over the
+/// unbiased). `nearest` is the source's point nearest the receiver; `weights[k][j]` is sample
+/// `k`'s weight in density `j` of `densities` (a uniform one is left alone). `W` is worked out
+/// as `d₀ + ∫ k (d − d₀) / ∫ k`, `d₀` the densities at the kernel's peak (`nearest`) and `∫ k`
+/// exact (Lambert's contour sum), so that where the density about the peak is `d₀` the rule's
+/// error there, where the kernel changes fastest, counts for nothing. The integral goes over the
 /// densities' cells (a density is constant over a cell, so no step of it falls within one;
 /// [`Tri::sample`] keeps areas, so cells weigh alike), by rules that grow cheaper with the
 /// distance in radii: [`BLOCK`]² cells at once beyond [`NEAR_BLOCK`] of the block's radii (the
@@ -982,7 +1018,8 @@ fn point_kernel(p: Vec3, n: Vec3, ns: Vec3, x: Vec3) -> Option<f32> {
 /// REFERENCES.md, "The kernel's mean by the density's cells").
 fn balance_weights<const N: usize>(
     (p, n): (Vec3, Vec3),
-    src: &Tri,
+    source: &Facing,
+    nearest: Vec3,
     samples: &[Vec3],
     weights: &mut [[f32; N]],
     densities: &DensitySet<N>,
@@ -992,13 +1029,7 @@ fn balance_weights<const N: usize>(
     if uniform.iter().all(|&u| u) || samples.is_empty() {
         return;
     }
-    // (the distance to the source's plane bounds the distance to the source from below)
-    let (area, ns) = (src.area(), src.normal());
-    let plane = ns.dot(p - src.v[0]);
-    if plane * plane >= BALANCE_FIELD * BALANCE_FIELD * area {
-        return;
-    }
-    let nearest = src.closest_point(p);
+    let (src, area, ns) = (source.src, source.area, source.normal);
     let d_min2 = (nearest - p).length_squared();
     if weights.len() != samples.len()
         || d_min2 >= BALANCE_FIELD * BALANCE_FIELD * area

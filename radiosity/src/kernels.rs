@@ -133,7 +133,7 @@ pub fn shoot_batch_sets<const N: usize>(
         let (eval, normal) = (Vec3::from(p.eval), Vec3::from(p.normal));
         let rays = receiver_samples_sets(
             (eval, normal),
-            source,
+            &facing,
             config,
             densities,
             &mut rng,

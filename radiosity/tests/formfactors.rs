@@ -380,7 +380,9 @@ fn a_receiver_under_an_overhang_draws_its_samples_where_it_sees_the_source() {
     // nine samples (eight rays) missed the strip on most seeds and the form factor was 0
     // (radiosity/REFERENCES.md, "The table's legs"). Drawn from the part above its horizon,
     // every seed gives the exact form factor (nothing occludes).
-    use occ_radiosity::formfactor::{SourceDensity, form_factor_weighted, receiver_samples};
+    use occ_radiosity::formfactor::{
+        Facing, SourceDensity, form_factor_weighted, receiver_samples,
+    };
     let src = Tri::new(
         Vec3::new(-0.05, 1.0, -2.0),
         Vec3::new(-0.05, 1.0, 2.0),
@@ -405,7 +407,7 @@ fn a_receiver_under_an_overhang_draws_its_samples_where_it_sees_the_source() {
         let none = None::<&SourceDensity>;
         let rays = receiver_samples(
             (p, n),
-            &src,
+            &Facing::new(&src),
             &config,
             none,
             &mut rng,

@@ -14,7 +14,7 @@ use super::{
     MAX_SAMPLES, RAY_FLOATS, SAMPLE_STREAM, array, array_mut, facing_receiver_rays, triangle,
 };
 use crate::formfactor::{
-    DensitySet, FormFactorConfig, SampleWeights, SourceDensity, form_factor_sets,
+    DensitySet, Facing, FormFactorConfig, SampleWeights, SourceDensity, form_factor_sets,
     form_factor_weighted, receiver_samples, receiver_samples_sets, sample_grid,
 };
 use crate::geom::Tri;
@@ -227,6 +227,7 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
             && end <= out.blocked.len()
             && CURSOR_INTS * end <= out.cursor.len()
     };
+    let (source, config) = (Facing::new(&shot.tri), &shot.config);
     for (floats, &g) in points.chunks_exact(RECEIVER_FLOATS).zip(global) {
         if taken + 2 > out.first.len() {
             break;
@@ -237,11 +238,10 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
         rng.leap(strides.of(set));
         match &shot.density {
             Densities::One(None) => {
-                let (tri, config) = (&shot.tri, &shot.config);
                 let none = None::<&SourceDensity>;
                 receiver_samples(
                     (p, n),
-                    tri,
+                    &source,
                     config,
                     none,
                     &mut rng,
@@ -250,12 +250,26 @@ fn fill_rays(shot: &Shot, points: &[f32], global: &[i32], out: &mut RaysOut) -> 
                 );
             }
             Densities::One(Some(set)) => {
-                let (tri, config) = (&shot.tri, &shot.config);
-                receiver_samples_sets((p, n), tri, config, set, &mut rng, &mut samples, &mut ones);
+                receiver_samples_sets(
+                    (p, n),
+                    &source,
+                    config,
+                    set,
+                    &mut rng,
+                    &mut samples,
+                    &mut ones,
+                );
             }
             Densities::Sets(set) => {
-                let (tri, config) = (&shot.tri, &shot.config);
-                receiver_samples_sets((p, n), tri, config, set, &mut rng, &mut samples, &mut sets);
+                receiver_samples_sets(
+                    (p, n),
+                    &source,
+                    config,
+                    set,
+                    &mut rng,
+                    &mut samples,
+                    &mut sets,
+                );
             }
         }
         let m = samples.len();

@@ -655,7 +655,7 @@ fn receiver_samples_at_a_set_are_the_solvers_with_far_rays() {
         let (p, n) = (Vec3::from_slice(&r[..3]), Vec3::from_slice(&r[3..]));
         let rays = crate::formfactor::receiver_samples(
             (p, n),
-            &tri,
+            &crate::formfactor::Facing::new(&tri),
             &config,
             None::<&crate::formfactor::SourceDensity>,
             &mut rng,

@@ -10,7 +10,7 @@ use occ_runtime::abi::Word;
 
 use super::{MAX_SAMPLES, MAX_SKIPPED_SETS, SAMPLE_STREAM, array, point, points, triangle};
 use crate::formfactor::{
-    FormFactorConfig, SourceDensity, form_factor_weighted, receiver_samples, sample_grid,
+    Facing, FormFactorConfig, SourceDensity, form_factor_weighted, receiver_samples, sample_grid,
     source_samples_weighted,
 };
 use crate::geom::Tri;
@@ -292,7 +292,7 @@ pub unsafe extern "C" fn receiver_samples_at(
             let density = density.as_ref();
             receiver_samples(
                 (p, n),
-                &tri,
+                &Facing::new(&tri),
                 &config,
                 density,
                 &mut rng,
