@@ -20,6 +20,7 @@ pub mod analysis;
 pub mod convergence;
 pub mod estimate;
 pub mod formfactor;
+pub mod gather;
 pub mod generate;
 pub mod geom;
 pub mod grid;

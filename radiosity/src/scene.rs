@@ -17,7 +17,7 @@
 use std::collections::HashMap;
 use std::io::BufReader;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use crate::geom::Tri;
 
@@ -210,6 +210,14 @@ pub struct Object {
     pub reflectance: Vec3,
     /// Emitted radiance `Ke`, RGB.
     pub emission: Vec3,
+}
+
+impl Object {
+    /// The radiosity `B = E + ρ H` of the object's surface under the irradiance `h` (`E = π
+    /// Ke`, the exitance of its emitted radiance).
+    pub fn radiosity(&self, h: DVec3) -> DVec3 {
+        self.emission.as_dvec3() * std::f64::consts::PI + self.reflectance.as_dvec3() * h
+    }
 }
 
 /// One triangle of the scene and the object it belongs to.

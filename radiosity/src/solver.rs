@@ -1029,6 +1029,18 @@ impl<'a> Solver<'a> {
     /// mean H.)
     pub fn object_means(&self) -> Vec<(f64, DVec3)> {
         let mut out = vec![(0.0, DVec3::ZERO); self.scene.objects.len()];
+        let h = self.element_irradiance();
+        for ((e, &a), mean) in self.mesh.elements.iter().zip(&self.element_area).zip(h) {
+            let o = &mut out[e.object as usize];
+            o.0 += a;
+            o.1 += mean * a;
+        }
+        self.means_of(out)
+    }
+
+    /// Each element's mean irradiance (of the irradiance at its vertices, taken by
+    /// [`SolverConfig::element_means`]; no ambient term).
+    fn element_irradiance(&self) -> Vec<DVec3> {
         let rebuilt;
         let means = if self.means.fits(&self.mesh) {
             &self.means
@@ -1036,13 +1048,16 @@ impl<'a> Solver<'a> {
             rebuilt = ElementMeans::new(&self.mesh, self.config.element_means);
             &rebuilt
         };
-        let h = means.means(&self.mesh, &self.irradiance);
-        for ((e, &a), mean) in self.mesh.elements.iter().zip(&self.element_area).zip(h) {
-            let o = &mut out[e.object as usize];
-            o.0 += a;
-            o.1 += mean * a;
-        }
-        self.means_of(out)
+        means.means(&self.mesh, &self.irradiance)
+    }
+
+    /// Each element's mean radiosity `E + ρ H` (its mean irradiance `H` as
+    /// [`Solver::object_means`] takes it; no ambient term) and its area.
+    pub fn element_radiosity(&self) -> Vec<(DVec3, f64)> {
+        let h = self.element_irradiance();
+        (self.mesh.elements.iter().zip(h).zip(&self.element_area))
+            .map(|((e, h), &a)| (self.scene.objects[e.object as usize].radiosity(h), a))
+            .collect()
     }
 
     /// Each object's area (the sum of its elements').
@@ -1070,9 +1085,14 @@ impl<'a> Solver<'a> {
         sums.into_iter()
             .zip(&self.scene.objects)
             .map(|((a, s), obj)| {
-                let b = obj.emission.as_dvec3() * std::f64::consts::PI
-                    + obj.reflectance.as_dvec3() * s / a;
-                (a, if a > 0.0 { b } else { DVec3::ZERO })
+                (
+                    a,
+                    if a > 0.0 {
+                        obj.radiosity(s / a)
+                    } else {
+                        DVec3::ZERO
+                    },
+                )
             })
             .collect()
     }

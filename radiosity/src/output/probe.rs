@@ -1,10 +1,12 @@
-//! Probes: `x y z nx ny nz` per line in, B (RGB) out, interpolated from the solution mesh of the
-//! surface at the point (the element in the plane of the point, facing the same way, that
-//! contains it or comes closest).
+//! Probes: `x y z nx ny nz` per line in, B (RGB) out: gathered at the point from every patch's
+//! radiosity ([`crate::gather`]), and as the solution mesh interpolates it there. The surface
+//! at the point is the element in the plane of the point, facing the same way, that contains it
+//! or comes closest.
 
 use glam::Vec3;
 
 use super::OutputError;
+use crate::gather::Gather;
 use crate::solver::Solver;
 
 /// A probe point.
@@ -57,8 +59,27 @@ pub fn parse_probes(file: &str, text: &str) -> Result<Vec<Probe>, OutputError> {
     Ok(out)
 }
 
-/// Returns B (RGB) at the probe, or `None` when no surface faces that way near the point.
+/// Returns B (RGB) at the probe as the mesh interpolates it (linearly, from the radiosity at the
+/// corners of the element holding it), or `None` when no surface faces that way near the point.
 pub fn evaluate(solver: &Solver, probe: &Probe) -> Option<Vec3> {
+    let (i, bary) = surface_at(solver, probe)?;
+    let b = solver.element_corner_radiosity(i, Vec3::ZERO);
+    Some(b[0] * bary[0] + b[1] * bary[1] + b[2] * bary[2])
+}
+
+/// Returns B (RGB) at the probe gathered from the patches of `gather` (`solver`'s:
+/// [`Gather::irradiance`]), `seed` choosing the samples; `None` as for [`evaluate`].
+pub fn gathered(solver: &Solver, gather: &Gather, probe: &Probe, seed: u64) -> Option<Vec3> {
+    let (i, _) = surface_at(solver, probe)?;
+    let object = &solver.scene.objects[solver.mesh.elements[i].object as usize];
+    let h = gather.irradiance(probe.pos, probe.normal, seed);
+    Some(object.radiosity(h).as_vec3())
+}
+
+/// The element of the surface at the probe and the probe's barycentric coordinates in it (of
+/// the element's point closest to it), or `None` when no element facing the probe's way lies
+/// within a thousandth of the scene's diagonal.
+fn surface_at(solver: &Solver, probe: &Probe) -> Option<(usize, [f32; 3])> {
     let mesh = &solver.mesh;
     let mut best: Option<(f32, usize, [f32; 3])> = None;
     for (i, e) in mesh.elements.iter().enumerate() {
@@ -73,23 +94,29 @@ pub fn evaluate(solver: &Solver, probe: &Probe) -> Option<Vec3> {
         }
     }
     let (d, i, bary) = best?;
-    let scale = solver.scene.diagonal();
-    if d > 1e-3 * scale {
-        return None;
-    }
-    let b = solver.element_corner_radiosity(i, Vec3::ZERO);
-    Some(b[0] * bary[0] + b[1] * bary[1] + b[2] * bary[2])
+    (d <= 1e-3 * solver.scene.diagonal()).then_some((i, bary))
 }
 
-/// Returns `probe.csv`: `x,y,z,nx,ny,nz,b_r,b_g,b_b` (empty B when no surface matched).
+/// Returns `probe.csv`: `x,y,z,nx,ny,nz,b_r,b_g,b_b,mesh_r,mesh_g,mesh_b`, B gathered at the
+/// probe ([`gathered`]) and as the mesh interpolates it ([`evaluate`]); both empty when no
+/// surface matched. The solver's seed chooses the gather's samples (each probe its own).
 pub fn probe_csv(solver: &Solver, probes: &[Probe]) -> String {
-    let mut s = String::from("x,y,z,nx,ny,nz,b_r,b_g,b_b\n");
-    for p in probes {
-        let b =
-            evaluate(solver, p).map_or(",,".to_string(), |b| format!("{},{},{}", b.x, b.y, b.z));
+    let gather = Gather::new(solver);
+    let mut s = String::from("x,y,z,nx,ny,nz,b_r,b_g,b_b,mesh_r,mesh_g,mesh_b\n");
+    let rgb = |b: Option<Vec3>| b.map_or(",,".to_string(), |b| format!("{},{},{}", b.x, b.y, b.z));
+    for (i, p) in probes.iter().enumerate() {
+        let seed = solver.config().seed ^ (i as u64) << 32;
+        let (b, mesh) = (gathered(solver, &gather, p, seed), evaluate(solver, p));
         s += &format!(
-            "{},{},{},{},{},{},{b}\n",
-            p.pos.x, p.pos.y, p.pos.z, p.normal.x, p.normal.y, p.normal.z
+            "{},{},{},{},{},{},{},{}\n",
+            p.pos.x,
+            p.pos.y,
+            p.pos.z,
+            p.normal.x,
+            p.normal.y,
+            p.normal.z,
+            rgb(b),
+            rgb(mesh)
         );
     }
     s
