@@ -682,10 +682,7 @@ pub fn receiver_samples<C: AsRef<[f32]>>(
         config,
         rng,
         out,
-        |rays, d_min2, rng, out| {
-            let part = Part::of(receiver, source, rays, d_min2, config);
-            part_samples_weighted(&part, rays, density, rng, out, weights)
-        },
+        |part, rays, rng, out| part_samples_weighted(part, rays, density, rng, out, weights),
     );
     let Some((rays, nearest)) = slot else {
         return 0;
@@ -716,10 +713,7 @@ pub fn receiver_samples_sets<const N: usize>(
         config,
         rng,
         out,
-        |rays, d_min2, rng, out| {
-            let part = Part::of(receiver, source, rays, d_min2, config);
-            part_samples_sets(&part, rays, densities, rng, out, weights)
-        },
+        |part, rays, rng, out| part_samples_sets(part, rays, densities, rng, out, weights),
     );
     let Some((rays, nearest)) = slot else {
         return 0;
@@ -728,17 +722,17 @@ pub fn receiver_samples_sets<const N: usize>(
     rays
 }
 
-/// The receiver's slot of `rng` ([`receiver_samples`]): `draw(rays, d_min², rng, out)` takes
-/// its samples from the slot's start (`d_min²` the squared distance to the source's point
-/// nearest the receiver), and `rng` is left at the next slot. Returns the rays and that point,
-/// or `None` where the receiver does not face the source.
-fn receiver_slot(
+/// The receiver's slot of `rng` ([`receiver_samples`]): `draw(part, rays, rng, out)` takes
+/// its samples of the part of the source it sees ([`Part::of`]) from the slot's start, and
+/// `rng` is left at the next slot. Returns the rays and the source's point nearest the
+/// receiver, or `None` where the receiver does not face the source.
+fn receiver_slot<'t>(
     (p, n): (Vec3, Vec3),
-    source: &Facing,
+    source: &Facing<'t>,
     config: &FormFactorConfig,
     rng: &mut Pcg32,
     out: &mut Vec<Vec3>,
-    draw: impl FnOnce(u32, f32, &mut Pcg32, &mut Vec<Vec3>),
+    draw: impl FnOnce(&Part<'t>, u32, &mut Pcg32, &mut Vec<Vec3>),
 ) -> Option<(u32, Vec3)> {
     let slot = 2 * u64::from(sample_grid(config.rays)).pow(2);
     let Some((rays, nearest)) = source.rays(p, n, config) else {
@@ -746,7 +740,8 @@ fn receiver_slot(
         rng.advance(slot);
         return None;
     };
-    draw(rays, (nearest - p).length_squared(), rng, out);
+    let part = Part::of((p, n), source, rays, (nearest - p).length_squared(), config);
+    draw(&part, rays, rng, out);
     rng.advance(slot - 2 * out.len() as u64);
     Some((rays, nearest))
 }
