@@ -93,3 +93,33 @@ fn the_default_command_reads_the_cornell_probes_within_3_percent() {
         }
     }
 }
+
+#[test]
+fn the_default_command_reads_the_two_rooms_probes_within_3_percent() {
+    // Room B is lit only through the doorway; report.json holds each probe against the
+    // path-traced reference given with `--reference`.
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes");
+    let (scene, probes, reference) = (
+        format!("{dir}/two-rooms.obj"),
+        format!("{dir}/references/two-rooms.probes"),
+        format!("{dir}/references/two-rooms-probes.pathtrace.json"),
+    );
+    let report = solve(
+        &scratch("carm-accuracy-two-rooms"),
+        &[&scene, "--image-size", "16", "--probe", &probes],
+        &["--reference", &reference],
+    );
+    let errors = report["probes"].as_array().expect("the probes' errors");
+    assert_eq!(errors.len(), 16, "every probe held to the reference");
+    for e in errors {
+        for c in 0..3 {
+            let error = e["relative_error"][c].as_f64().expect("an error");
+            assert!(
+                error.abs() <= 0.03,
+                "probe at {}: {:+.2}%",
+                e["pos"],
+                100.0 * error
+            );
+        }
+    }
+}

@@ -331,8 +331,10 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
     if reports {
         print_stages(&solver);
     }
+    let mut reference_probes = Vec::new();
     if let Some(path) = &args.reference {
         let text = read(path)?;
+        reference_probes = truth::Reference::probes_of(&path.display().to_string(), &text)?;
         let names: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
         let file = path.display().to_string();
         for warning in report::reference_mismatch(
@@ -421,12 +423,16 @@ pub fn execute(args: Args) -> anyhow::Result<ExitCode> {
         octree: octree_time,
         solve: t3.elapsed().as_secs_f64(),
     };
+    let probes = probes.as_deref().map(|probes| Probes {
+        probes,
+        truth: truth.as_ref().map_or(&reference_probes, |t| &t.probes),
+    });
     write_outputs(
         &args,
         &solver,
         &name,
         timings,
-        probes.as_deref(),
+        probes,
         truth.as_ref(),
         network.as_ref(),
     )?;
@@ -784,12 +790,19 @@ fn solve(solver: &mut Solver, progress: &Progress) {
     progress.done();
 }
 
+/// The probes to read (`--probe`), and the path tracer's at the same points, if any
+/// (`--reference`, `--reference-mc`).
+struct Probes<'p> {
+    probes: &'p [probe::Probe],
+    truth: &'p [truth::ProbeTruth],
+}
+
 fn write_outputs(
     args: &Args,
     solver: &Solver,
     name: &str,
     timings: report::Timings,
-    probes: Option<&[probe::Probe]>,
+    probes: Option<Probes>,
     truth: Option<&truth::Reference>,
     network: Option<&carm::CarmReport>,
 ) -> anyhow::Result<()> {
@@ -811,6 +824,13 @@ fn write_outputs(
         let errors = truth::object_errors(&names, &means, truth);
         print!("{}", truth::error_table(&errors));
         rep.truth = Some(errors);
+    }
+    let values = probes.as_ref().map(|p| probe::values(solver, p.probes));
+    if let (Some(values), Some(p)) = (&values, &probes) {
+        rep.probes = truth::probe_errors(values, p.truth);
+        if !rep.probes.is_empty() {
+            print!("{}", truth::probe_summary(&rep.probes));
+        }
     }
     if let Some(line) = network.and_then(|net| carm_left_out(args, net)) {
         rep.left_out.push(line);
@@ -846,8 +866,8 @@ fn write_outputs(
         "solution.ply",
         ply::solution_ply(solver, args.exposure).as_bytes(),
     )?;
-    if let Some(probes) = probes {
-        write("probe.csv", probe::probe_csv(solver, probes).as_bytes())?;
+    if let Some(values) = &values {
+        write("probe.csv", probe::probe_csv(values).as_bytes())?;
     }
     let t = &rep.totals;
     println!(

@@ -97,26 +97,51 @@ fn surface_at(solver: &Solver, probe: &Probe) -> Option<(usize, [f32; 3])> {
     (d <= 1e-3 * solver.scene.diagonal()).then_some((i, bary))
 }
 
-/// Returns `probe.csv`: `x,y,z,nx,ny,nz,b_r,b_g,b_b,mesh_r,mesh_g,mesh_b`, B gathered at the
-/// probe ([`gathered`]) and as the mesh interpolates it ([`evaluate`]); both empty when no
-/// surface matched. The solver's seed chooses the gather's samples (each probe its own).
-pub fn probe_csv(solver: &Solver, probes: &[Probe]) -> String {
+/// A probe's B: gathered ([`gathered`]) and as the mesh interpolates it ([`evaluate`]); both
+/// `None` when no surface matched.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProbeValue {
+    /// The probe.
+    pub probe: Probe,
+    /// B gathered at the point.
+    pub b: Option<Vec3>,
+    /// B as the mesh interpolates it.
+    pub mesh: Option<Vec3>,
+}
+
+/// Each probe's [`ProbeValue`], the solver's seed choosing the gather's samples (each probe
+/// its own).
+pub fn values(solver: &Solver, probes: &[Probe]) -> Vec<ProbeValue> {
     let gather = Gather::new(solver);
+    (probes.iter().enumerate())
+        .map(|(i, &probe)| {
+            let seed = solver.config().seed ^ (i as u64) << 32;
+            ProbeValue {
+                probe,
+                b: gathered(solver, &gather, &probe, seed),
+                mesh: evaluate(solver, &probe),
+            }
+        })
+        .collect()
+}
+
+/// Returns `probe.csv`: `x,y,z,nx,ny,nz,b_r,b_g,b_b,mesh_r,mesh_g,mesh_b`, B gathered at each
+/// probe and as the mesh interpolates it ([`values`]); empty where no surface matched.
+pub fn probe_csv(values: &[ProbeValue]) -> String {
     let mut s = String::from("x,y,z,nx,ny,nz,b_r,b_g,b_b,mesh_r,mesh_g,mesh_b\n");
     let rgb = |b: Option<Vec3>| b.map_or(",,".to_string(), |b| format!("{},{},{}", b.x, b.y, b.z));
-    for (i, p) in probes.iter().enumerate() {
-        let seed = solver.config().seed ^ (i as u64) << 32;
-        let (b, mesh) = (gathered(solver, &gather, p, seed), evaluate(solver, p));
+    for v in values {
+        let (p, n) = (v.probe.pos, v.probe.normal);
         s += &format!(
             "{},{},{},{},{},{},{},{}\n",
-            p.pos.x,
-            p.pos.y,
-            p.pos.z,
-            p.normal.x,
-            p.normal.y,
-            p.normal.z,
-            rgb(b),
-            rgb(mesh)
+            p.x,
+            p.y,
+            p.z,
+            n.x,
+            n.y,
+            n.z,
+            rgb(v.b),
+            rgb(v.mesh)
         );
     }
     s

@@ -114,6 +114,10 @@ pub struct Report {
     /// Each object's error against the path-traced truth (`--reference-mc`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub truth: Option<Vec<super::truth::ObjectError>>,
+    /// Each probe's error against the path tracer's (`--probe` with a reference that has the
+    /// same probes: `--reference` a `pathtrace.json`, or `--reference-mc`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub probes: Vec<super::truth::ProbeError>,
 }
 
 /// Builds the report of a finished solve.
@@ -167,6 +171,7 @@ pub fn build(solver: &Solver, file: &str, timings: Timings) -> Report {
         rms_error: errors.as_ref().map(|e| e.rms),
         max_error: errors.map(|e| e.max),
         truth: None,
+        probes: Vec::new(),
     }
 }
 
