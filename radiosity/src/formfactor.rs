@@ -660,8 +660,9 @@ pub fn receiver_rays(p: Vec3, n: Vec3, src: &Tri, config: &FormFactorConfig) -> 
 }
 
 /// Draws the weighted samples of the `source` ([`source_samples_weighted`]; its normal and
-/// area worked out once for a batch's receivers) that the receiver `(p, n)` casts its rays to, [`receiver_rays`] of them (rounded up to a square); none when it does not
-/// face the source. Every receiver owns a slot of `2k²` numbers of `rng`, `k` =
+/// area worked out once for a batch's receivers) that the receiver `(p, n)` casts its rays
+/// to, [`receiver_rays`] of them (rounded up to a square); none when it does not face the
+/// source. Every receiver owns a slot of `2k²` numbers of `rng`, `k` =
 /// [`sample_grid`]`(config.rays)`, draws from its start and leaves `rng` at the next slot, so
 /// the receivers of a batch draw from one generator in order and a node holding one of them
 /// draws the same set by skipping to its slot (`RAD.RECEIVER.SAMPLES`). A near receiver's

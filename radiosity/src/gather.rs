@@ -12,13 +12,14 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-use crate::formfactor::{DensitySet, FormFactorConfig, SourceDensity, point_polygon};
+use crate::formfactor::{DensitySet, FormFactorConfig, SourceDensity, faces, point_polygon};
 use crate::geom::Tri;
 use crate::kernels::{SamplePoint, shoot_batch_sets};
 use crate::solver::{DENSITY_GRID, Solver};
 
-/// Shadow rays a point casts in all, spread over the patches in proportion to the share of its
-/// unoccluded irradiance each could give it.
+/// Shadow rays a point casts in all at most, spread over the patches that face it in
+/// proportion to the share of its unoccluded irradiance each could give it (each patch's
+/// rounded up, and capped at [`MOST_RAYS`]).
 pub const GATHER_RAYS: u32 = 1 << 16;
 
 /// The most rays a point casts to one patch (a 32 × 32 grid of its samples).
@@ -75,9 +76,15 @@ impl<'s> Gather<'s> {
     /// The irradiance `H = Σ_p F(x, p) B_p` at the point `eval` with unit normal `normal`
     /// (RGB), `seed` choosing its samples.
     pub fn irradiance(&self, eval: Vec3, normal: Vec3, seed: u64) -> DVec3 {
-        // what each patch could give the point unoccluded, a bound to spread the rays by
+        // what each patch could give the point unoccluded, a bound to spread the rays by (none
+        // from a patch that does not face it, its own among them, which no ray is cast to)
         let bounds: Vec<f64> = (self.patches.par_iter())
-            .map(|s| f64::from(point_polygon(eval, normal, &s.tri.v)) * s.mean.max_element())
+            .map(|s| {
+                if !faces(eval, normal, &s.tri) {
+                    return 0.0;
+                }
+                f64::from(point_polygon(eval, normal, &s.tri.v)) * s.mean.max_element()
+            })
             .collect();
         let total: f64 = bounds.iter().sum();
         if total <= 0.0 {
@@ -90,7 +97,8 @@ impl<'s> Gather<'s> {
             normal: normal.to_array(),
             eval: eval.to_array(),
         }];
-        (self.patches.par_iter().zip(&bounds).enumerate())
+        // (collected, then summed in the patches' order: the same answer on every run)
+        let parts: Vec<DVec3> = (self.patches.par_iter().zip(&bounds).enumerate())
             .filter(|(_, (_, b))| **b > 0.0)
             .map(|(i, (source, &bound))| {
                 let share = bound / total * f64::from(GATHER_RAYS);
@@ -111,7 +119,8 @@ impl<'s> Gather<'s> {
                 shoot_batch_sets(octree, &source.tri, &set, &point, &config, seed, &mut out);
                 source.mean * Vec3::from(out[0]).as_dvec3()
             })
-            .sum()
+            .collect();
+        parts.into_iter().sum()
     }
 
     /// How each channel of the patch's radiosity varies over it (`None`: uniform).

@@ -180,7 +180,7 @@ fn cornell_floor_centre_direct_irradiance() {
 #[test]
 fn a_gather_before_any_shot_is_the_direct_light() {
     // Before any shot only the light has radiosity, so the radiosity gathered at the floor's
-    // centre is the direct light's. Gathered with the light's share of 65,536 rays, it holds
+    // centre is the direct light's. Gathered with 1,024 rays to each light patch, it holds
     // to a fifth of a percent, where the mesh, which nothing has reached, reads it dark.
     let scene = cornell::load(false).expect("scene");
     let solver = open_cornell_solver(&scene);

@@ -107,8 +107,8 @@ impl Reference {
         })
     }
 
-    /// The probes of a reference file read by `--reference` (a path-traced reference's; none
-    /// in a `report.json`, which has no `probes`).
+    /// The probes of a reference file read by `--reference`: a path-traced reference's (it
+    /// names its `tool`); none from a `report.json`, whose `probes` are its errors.
     pub fn probes_of(file: &str, text: &str) -> Result<Vec<ProbeTruth>, OutputError> {
         let err = |message: String| OutputError::Reference {
             file: file.into(),
@@ -117,6 +117,7 @@ impl Reference {
         let value: serde_json::Value =
             serde_json::from_str(text).map_err(|e| err(format!("not JSON: {e}")))?;
         match value.get("probes") {
+            _ if value.get("tool").is_none() => Ok(Vec::new()),
             None => Ok(Vec::new()),
             Some(probes) => serde_json::from_value(probes.clone())
                 .map_err(|e| err(format!("its `probes` are not a path tracer's: {e}"))),
