@@ -45,6 +45,10 @@ const PROGRAM_INCLUDES: &[(&str, &str)] = &[
         include_str!("../../../programs/carm-worker-state.inc"),
     ),
     (
+        "carm-worker-arrays.inc",
+        include_str!("../../../programs/carm-worker-arrays.inc"),
+    ),
+    (
         "carm-worker-shots.inc",
         include_str!("../../../programs/carm-worker-shots.inc"),
     ),
