@@ -461,6 +461,8 @@ fn capacities(
                 growth > 0,
             ),
         ),
+        // the patches a node owns (carm-common.inc's patch.owner: round the nodes but the root)
+        ("NODE.OWNED", mesh.patches.len().div_ceil(keepers)),
         ("MAX.ELEMENTS", elements),
         ("MAX.PATCH.ELEMENTS", most_in_one),
         ("MAX.PATCHES", mesh.patches.len()),
@@ -1175,8 +1177,8 @@ enum Message {
     Received(Vec<(usize, DVec3)>),
     /// A read of voxel `1` from the backing store for node `0`.
     Read(i32, i32),
-    /// Every patch's unshot power left.
-    Patches(Vec<DVec3>),
+    /// The unshot power left on some patches (their owner's), each with its index.
+    Patches(Vec<(usize, DVec3)>),
     /// The scene is over the program's capacities: its limits on the tree's INTs, voxels, the
     /// voxels' REAL32s, one voxel's REAL32s, patches, sample points, rays, nodes, elements,
     /// elements of one patch and objects.
@@ -1265,10 +1267,7 @@ impl Message {
                     .collect::<Result<_, _>>()?;
                 Message::MoreCounters(more)
             }
-            tag::PATCHES => {
-                let count = usize::try_from(r.int()?).map_err(|_| Short)?;
-                Message::Patches((0..count / 3).map(|_| rgb64(r)).collect::<Result<_, _>>()?)
-            }
+            tag::PATCHES => Message::Patches(Message::received(r)?),
             tag::REHASHED => {
                 let count = usize::try_from(r.int()?).map_err(|_| Short)?;
                 let each = (0..count).map(|_| r.int().map(|n| n as u64));
@@ -1314,6 +1313,8 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
     let mut rehashed = Vec::new();
     let mut more = std::collections::BTreeMap::new();
     let mut results = 0;
+    // the patches whose unshot power their owners reported at the end
+    let mut left = vec![false; patches];
     // the parts of the next shot's report so far, and how many parts came in all
     let mut pending = Vec::new();
     let mut parts = 0u64;
@@ -1400,17 +1401,22 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
             }
             Message::Rehashed(r) => rehashed = r,
             Message::Patches(theirs) => {
-                anyhow::ensure!(
-                    theirs.len() == patches,
-                    "carm.occ reported {} patch values",
-                    3 * theirs.len()
-                );
-                for (p, (theirs, u)) in theirs.iter().zip(&solver.unshot).enumerate() {
+                for (p, theirs) in theirs {
+                    let u = solver.unshot.get(p).ok_or_else(|| {
+                        anyhow::anyhow!(
+                            "carm.occ reported the unshot power of patch {p}, which does not exist"
+                        )
+                    })?;
                     anyhow::ensure!(
-                        theirs == u,
+                        !left[p],
+                        "carm.occ reported the unshot power of patch {p} twice"
+                    );
+                    anyhow::ensure!(
+                        theirs == *u,
                         "carm.occ's unshot power of patch {p} ({theirs}) disagrees with its shot \
                          record ({u})"
                     );
+                    left[p] = true;
                 }
             }
             Message::Refused([t, x, f, b, p, v, s, n, e, k, o]) => anyhow::bail!(
@@ -1421,6 +1427,11 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
             ),
         }
     }
+    let reported = left.iter().filter(|&&l| l).count();
+    anyhow::ensure!(
+        reported == patches,
+        "carm.occ reported the unshot power of {reported} of {patches} patches"
+    );
     anyhow::ensure!(
         results == solver.irradiance.len(),
         "carm.occ returned {results} of {} sample points",
