@@ -18,6 +18,7 @@ use std::sync::{Arc, Mutex};
 
 use glam::{DVec3, Vec3};
 use occ_codegen::network::{NetworkOptions, NetworkOutcome};
+use occ_radiosity::intrinsics::weights::mesh_weights;
 use occ_radiosity::mesh::Mesh;
 use occ_radiosity::octree::flat::{FlatOctree, MAX_NAMED_TRIANGLES, NAMED_TRIANGLE_FLOATS};
 use occ_radiosity::overshoot::Acceleration;
@@ -106,6 +107,7 @@ mod tag {
     pub const SPLIT: i32 = 8;
     pub const MORE_COUNTERS: i32 = 9;
     pub const RECEIVED: i32 = 10;
+    pub const SOURCE: i32 = 11;
 }
 
 /// How to run carm.occ.
@@ -301,10 +303,10 @@ pub fn solve(
     // the points each element keeps corners at on the nodes, by the rule it books by
     let supports = Supports::new(&solver.mesh, solver.config().element_means);
     let corners_at = supports.at_vertices(solver.mesh.vertices.len());
-    let (input, store) = if host_here {
+    let (input, store, sources) = if host_here {
         host_input(solver, &flat, &items, settings, &corners_at)?
     } else {
-        (Vec::new(), None)
+        (Vec::new(), None, None)
     };
     let capacities = capacities(solver, &flat, &items, settings, &supports, &corners_at)?;
     let shares = store.as_ref().map(|s| s.shares.clone());
@@ -333,6 +335,7 @@ pub fn solve(
         broken: false,
         on_shot,
         store,
+        sources,
         answers: answers.clone(),
     };
     let keyboard = Keyboard {
@@ -444,8 +447,13 @@ fn capacities(
     };
     let dealt_corners: usize = corners_at.iter().sum();
     let node_corners = share(dealt_corners + per_point * growth) + most_at_one + round(per_point);
+    // where no point can be added the mesh never changes: the controller keeps none of it
+    // (programs/README.md, "The mesh at the host")
+    let kept = growth > 0;
     let mut capacities = vec![
         ("MAX.POINTS", points),
+        ("MAX.MESH.POINTS", if kept { points } else { 1 }),
+        ("MAX.MESH.ELEMENTS", if kept { elements } else { 1 }),
         // adaptive subdivision's arrays at the root: none when it can add no point
         ("MAX.REFINE.POINTS", if growth > 0 { points } else { 1 }),
         ("NODE.POINTS", node_points),
@@ -536,6 +544,7 @@ fn capacities(
             ("LOAN", if settings.poach { LOAN } else { 0 }),
             ("CHANNEL.GRIDS", usize::from(settings.channel_grids)),
             ("QUADRATIC", usize::from(rule == MeanRule::Quadratic)),
+            ("MESH.KEPT", usize::from(kept)),
         ])
         .collect())
 }
@@ -768,7 +777,7 @@ fn host_input(
     items: &Items,
     settings: &CarmSettings,
     corners_at: &[usize],
-) -> anyhow::Result<(Vec<u8>, Option<Store>)> {
+) -> anyhow::Result<(Vec<u8>, Option<Store>, Option<Sources>)> {
     let config = solver.config();
     let (scene, mesh) = (solver.scene, &solver.mesh);
     // Negative: not a stopping rule of this run.
@@ -918,7 +927,35 @@ fn host_input(
         w.vec3(v.eval);
         w.int(int(c, "element corners at one sample point")?);
     }
-    for e in by_patch.iter().map(|&e| &mesh.elements[e]) {
+    // Where no point can be added the controller keeps no mesh (programs/README.md, "The mesh
+    // at the host"): each element comes with its corner weights by the quadratic rule, and the
+    // host answers the shooter's elements' triangles and areas (`Sources`).
+    let kept = point_budget(solver) > mesh.vertices.len();
+    let weights = if !kept && config.element_means == MeanRule::Quadratic {
+        let element: Vec<i32> = by_patch
+            .iter()
+            .flat_map(|&e| mesh.elements[e].v.map(|v| v as i32))
+            .collect();
+        let point: Vec<f32> = mesh
+            .vertices
+            .iter()
+            .flat_map(|v| [v.pos, v.normal, v.eval])
+            .flat_map(|v| v.to_array())
+            .collect();
+        let mut all = Vec::with_capacity(by_patch.len());
+        mesh_weights(&element, &point, |_, ws| all.push(ws.to_vec()))
+            .ok_or_else(|| anyhow::anyhow!("the mesh's corner weights: a vertex out of range"))?;
+        Some(all)
+    } else {
+        None
+    };
+    let mut sources = (!kept).then(|| Sources {
+        first: vec![0; mesh.patches.len()],
+        count: vec![0; mesh.patches.len()],
+        tris: Vec::with_capacity(by_patch.len()),
+        areas: Vec::with_capacity(by_patch.len()),
+    });
+    for (i, e) in by_patch.iter().map(|&e| &mesh.elements[e]).enumerate() {
         for v in e.v {
             w.int(v as i32);
         }
@@ -929,12 +966,60 @@ fn host_input(
         for c in 0..3 {
             w.real64(emitted[c]);
         }
+        if let Some(weights) = &weights {
+            let ws = &weights[i];
+            w.int(int(ws.len(), "weights of one element")?);
+            for &(v, x) in ws {
+                w.int(v as i32);
+                w.real64(x);
+            }
+        }
+        if let Some(s) = &mut sources {
+            let p = e.patch as usize;
+            if s.count[p] == 0 {
+                s.first[p] = i;
+            }
+            s.count[p] += 1;
+            s.tris
+                .push(e.v.map(|v| mesh.vertices[v as usize].pos.to_array()));
+            s.areas.push(area);
+        }
     }
     let store = match (&settings.memory, spread) {
         (Some(memory), Some((_, shares))) => Some(Store::write(&memory.store, items, shares)?),
         _ => None,
     };
-    Ok((w.0, store))
+    Ok((w.0, store, sources))
+}
+
+/// The mesh's elements as the host sends them (grouped by patch), for the controller's reads
+/// of a shooter's elements when it keeps no mesh (host protocol, tag 11): patch p's are
+/// `first[p] ..` for `count[p]`, each its triangle's corners and its area.
+struct Sources {
+    first: Vec<usize>,
+    count: Vec<usize>,
+    tris: Vec<[[f32; 3]; 3]>,
+    areas: Vec<f64>,
+}
+
+impl Sources {
+    /// The answer to a read of patch p's elements: INT k, then per element 9 REAL32 and a
+    /// REAL64; k = -1 for a patch that does not exist.
+    fn answer(&self, p: i32) -> Vec<u8> {
+        let mut w = Writer::default();
+        match usize::try_from(p).ok().filter(|&p| p < self.first.len()) {
+            None => w.int(-1),
+            Some(p) => {
+                let range = self.first[p]..self.first[p] + self.count[p];
+                w.int(self.count[p] as i32);
+                for (tri, &area) in self.tris[range.clone()].iter().zip(&self.areas[range]) {
+                    tri.iter().flatten().for_each(|&x| w.real32(x));
+                    w.real64(area);
+                }
+            }
+        }
+        w.0
+    }
 }
 
 /// The geometry the host sends in the host protocol's places for voxels: carm.occ's voxel
@@ -1177,6 +1262,8 @@ enum Message {
     Received(Vec<(usize, DVec3)>),
     /// A read of voxel `1` from the backing store for node `0`.
     Read(i32, i32),
+    /// A read of this patch's elements (their triangles and areas) for the shooter's source.
+    Source(i32),
     /// The unshot power left on some patches (their owner's), each with its index.
     Patches(Vec<(usize, DVec3)>),
     /// The scene is over the program's capacities: its limits on the tree's INTs, voxels, the
@@ -1249,6 +1336,7 @@ impl Message {
             }
             tag::RECEIVED => Message::Received(Message::received(r)?),
             tag::READ => Message::Read(r.int()?, r.int()?),
+            tag::SOURCE => Message::Source(r.int()?),
             tag::SPLIT => {
                 let [a, b, m] = [(); 3].map(|_| r.int().map(|v| v as u32));
                 Message::Split(a?, b?, m?)
@@ -1328,7 +1416,7 @@ fn book(solver: &mut Solver, bytes: &[u8]) -> anyhow::Result<Booked> {
         at += len;
         match message {
             Message::End => break,
-            Message::Read(..) => {}
+            Message::Read(..) | Message::Source(_) => {}
             Message::Received(part) => {
                 parts += 1;
                 pending.extend(part);
@@ -1597,6 +1685,8 @@ struct Screen {
     on_shot: OnShot,
     /// The backing store, when the voxels are spread.
     store: Option<Store>,
+    /// The mesh's elements, when the controller keeps none (no point can be added).
+    sources: Option<Sources>,
     /// Where the answers to reads go: the keyboard's input after the scene.
     answers: Pipe,
 }
@@ -1620,6 +1710,12 @@ impl std::io::Write for Screen {
                             if let Some(store) = &mut self.store {
                                 let answer = store.answer(asker, v)?;
                                 self.answers.push(&answer);
+                            }
+                        }
+                        Message::Source(p) => {
+                            // Without the mesh's elements, the root hears of the end of input.
+                            if let Some(sources) = &self.sources {
+                                self.answers.push(&sources.answer(p));
                             }
                         }
                         _ => {}

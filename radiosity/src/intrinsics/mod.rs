@@ -790,7 +790,7 @@ mod refine;
 #[cfg(test)]
 mod test;
 pub mod weighted;
-mod weights;
+pub mod weights;
 
 mod walk;
 

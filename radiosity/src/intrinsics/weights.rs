@@ -119,6 +119,42 @@ pub unsafe extern "C" fn element_weights_of(
     unsafe { *n = written };
 }
 
+/// The weights `RAD.ELEMENT.WEIGHTS` gives every element of the mesh `element` (three vertex
+/// indices a triangle; `point`: 9 floats a vertex, as the controller keeps them), with the
+/// elements around each vertex as `RAD.ELEMENTS.AROUND` lists them: `each(e, weights)` for
+/// each element in order, its `(vertex, weight)` pairs in the intrinsic's order. So a host
+/// that deals an unchanging mesh's corners for the controller gives the nodes the very weights
+/// the controller would have. `None` when a vertex index is out of range or `point` is not 9
+/// floats a vertex.
+pub fn mesh_weights(
+    element: &[i32],
+    point: &[f32],
+    mut each: impl FnMut(usize, &[(u32, f64)]),
+) -> Option<()> {
+    let vertices = point.len() / POINT_FLOATS;
+    let valid = point.len().is_multiple_of(POINT_FLOATS)
+        && element.len().is_multiple_of(3)
+        && element.iter().all(|&v| v >= 0 && (v as usize) < vertices);
+    if !valid {
+        return None;
+    }
+    let (first, around) = elements_around(vertices, corners_of(element));
+    let first: Vec<i32> = first.into_iter().map(|x| x as i32).collect();
+    let around: Vec<i32> = around.into_iter().map(|x| x as i32).collect();
+    let mesh = FlatSupport {
+        element,
+        point,
+        first: &first,
+        around: &around,
+    };
+    let mut out = Vec::new();
+    for e in 0..element.len() / 3 {
+        element_weights(&mesh, e as u32, &mut out);
+        each(e, &out);
+    }
+    Some(())
+}
+
 /// `RAD.ELEMENT.WEIGHTS`'s work: the number written, or `None` when `at` or `weight` runs out.
 fn write_weights(
     mesh: &FlatSupport,
