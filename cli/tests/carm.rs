@@ -435,6 +435,15 @@ fn carm_refuses_what_it_cannot_do_clearly() {
     let bare = out.join("no-quadratic.occ");
     std::fs::write(&bare, without).expect("the copy");
     let bare = bare.to_str().expect("a UTF-8 path");
+    // and without MESH.KEPT (the host's weights would be read as the next element)
+    let without: String = (program.lines())
+        .filter(|l| !l.starts_with("VAL INT MESH.KEPT IS"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert!(without.len() < program.len(), "carm.occ declares MESH.KEPT");
+    let unkept = out.join("no-mesh-kept.occ");
+    std::fs::write(&unkept, without).expect("the copy");
+    let unkept = unkept.to_str().expect("a UTF-8 path");
     for (flags, says) in [
         (
             &["--solver", "carm", "--no-adapt", "--until", "time=1"][..],
@@ -456,6 +465,11 @@ fn carm_refuses_what_it_cannot_do_clearly() {
         (
             &["--solver", "carm", "--program", bare][..],
             "does not book by the quadratic rule",
+        ),
+        // One that keeps the mesh, where the host deals the weights.
+        (
+            &["--solver", "carm", "--program", unkept, "--no-adapt"][..],
+            "declares no MESH.KEPT capacity",
         ),
         // More rays per form factor than carm.occ's fixed arrays take.
         (

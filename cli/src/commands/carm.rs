@@ -294,6 +294,14 @@ pub fn solve(
             "--program {name} does not book by the quadratic rule (it declares no QUADRATIC \
              capacity, programs/README.md, \"Quadratic booking\"): run it with --element-means linear"
         );
+        anyhow::ensure!(
+            solver.config().element_means == MeanRule::Linear
+                || mesh_kept(solver)
+                || declares(text, "MESH.KEPT"),
+            "--program {name} cannot take the corner weights the host deals where no point can \
+             be added (it declares no MESH.KEPT capacity, programs/README.md, \"The mesh at the \
+             host\"): run it with --element-means linear, or with points to add (--max-vertices)"
+        );
     }
     let items = if named {
         Items::named(solver, &flat)?
@@ -449,7 +457,7 @@ fn capacities(
     let node_corners = share(dealt_corners + per_point * growth) + most_at_one + round(per_point);
     // where no point can be added the mesh never changes: the controller keeps none of it
     // (programs/README.md, "The mesh at the host")
-    let kept = growth > 0;
+    let kept = mesh_kept(solver);
     let mut capacities = vec![
         ("MAX.POINTS", points),
         ("MAX.MESH.POINTS", if kept { points } else { 1 }),
@@ -679,6 +687,13 @@ fn point_budget(solver: &Solver) -> usize {
         .config()
         .adapt
         .map_or(points, |a| a.max_vertices.max(points))
+}
+
+/// Whether the controller keeps the mesh: adaptive subdivision can add points to it. Where it
+/// cannot, the host deals the corner weights and answers the shooter's elements instead
+/// (programs/README.md, "The mesh at the host").
+fn mesh_kept(solver: &Solver) -> bool {
+    point_budget(solver) > solver.mesh.vertices.len()
 }
 
 /// The most elements of any one patch.
@@ -930,32 +945,16 @@ fn host_input(
     // Where no point can be added the controller keeps no mesh (programs/README.md, "The mesh
     // at the host"): each element comes with its corner weights by the quadratic rule, and the
     // host answers the shooter's elements' triangles and areas (`Sources`).
-    let kept = point_budget(solver) > mesh.vertices.len();
-    let weights = if !kept && config.element_means == MeanRule::Quadratic {
-        let element: Vec<i32> = by_patch
-            .iter()
-            .flat_map(|&e| mesh.elements[e].v.map(|v| v as i32))
-            .collect();
-        let point: Vec<f32> = mesh
-            .vertices
-            .iter()
-            .flat_map(|v| [v.pos, v.normal, v.eval])
-            .flat_map(|v| v.to_array())
-            .collect();
-        let mut all = Vec::with_capacity(by_patch.len());
-        mesh_weights(&element, &point, |_, ws| all.push(ws.to_vec()))
-            .ok_or_else(|| anyhow::anyhow!("the mesh's corner weights: a vertex out of range"))?;
-        Some(all)
-    } else {
-        None
-    };
+    let kept = mesh_kept(solver);
     let mut sources = (!kept).then(|| Sources {
         first: vec![0; mesh.patches.len()],
         count: vec![0; mesh.patches.len()],
         tris: Vec::with_capacity(by_patch.len()),
         areas: Vec::with_capacity(by_patch.len()),
     });
-    for (i, e) in by_patch.iter().map(|&e| &mesh.elements[e]).enumerate() {
+    // Element i (in the order sent), with its weights when it carries them.
+    let mut element = |i: usize, weights: Option<&[(u32, f64)]>| {
+        let e = &mesh.elements[by_patch[i]];
         for v in e.v {
             w.int(v as i32);
         }
@@ -966,9 +965,10 @@ fn host_input(
         for c in 0..3 {
             w.real64(emitted[c]);
         }
-        if let Some(weights) = &weights {
-            let ws = &weights[i];
-            w.int(int(ws.len(), "weights of one element")?);
+        if let Some(ws) = weights {
+            // (an element's support: its corners and the elements around them, far below
+            // i32::MAX)
+            w.int(ws.len() as i32);
             for &(v, x) in ws {
                 w.int(v as i32);
                 w.real64(x);
@@ -984,6 +984,23 @@ fn host_input(
                 .push(e.v.map(|v| mesh.vertices[v as usize].pos.to_array()));
             s.areas.push(area);
         }
+    };
+    if !kept && config.element_means == MeanRule::Quadratic {
+        // over the arrays the controller would have weighed them over
+        let corners: Vec<i32> = by_patch
+            .iter()
+            .flat_map(|&e| mesh.elements[e].v.map(|v| v as i32))
+            .collect();
+        let point: Vec<f32> = mesh
+            .vertices
+            .iter()
+            .flat_map(|v| [v.pos, v.normal, v.eval])
+            .flat_map(|v| v.to_array())
+            .collect();
+        mesh_weights(&corners, &point, |i, ws| element(i, Some(ws)))
+            .ok_or_else(|| anyhow::anyhow!("the mesh's corner weights: a vertex out of range"))?;
+    } else {
+        (0..by_patch.len()).for_each(|i| element(i, None));
     }
     let store = match (&settings.memory, spread) {
         (Some(memory), Some((_, shares))) => Some(Store::write(&memory.store, items, shares)?),

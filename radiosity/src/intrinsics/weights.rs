@@ -296,6 +296,91 @@ mod tests {
         );
     }
 
+    /// A 4 x 4 grid of points, bent so that the quadratic rule has curvature to weigh, in 18
+    /// triangles.
+    fn bent_grid() -> (Vec<i32>, Vec<f32>) {
+        let mut point = Vec::new();
+        for j in 0..4 {
+            for i in 0..4 {
+                let (x, y) = (i as f32, j as f32);
+                let z = 0.1 * x * x + 0.05 * x * y;
+                point.extend([x, y, z, 0.0, 0.0, 1.0, x, y, z]);
+            }
+        }
+        let mut element = Vec::new();
+        for j in 0..3 {
+            for i in 0..3 {
+                let v = 4 * j + i;
+                element.extend([v, v + 1, v + 5, v, v + 5, v + 4]);
+            }
+        }
+        (element, point)
+    }
+
+    #[test]
+    fn the_host_deals_the_weights_the_controller_would_work_out() {
+        let (element, point) = bent_grid();
+        // the controller's way: the intrinsics over its arrays, all elements in one call
+        let (mut first, mut around, mut listed) = (vec![0i32; 17], vec![0i32; element.len()], 0);
+        // SAFETY: valid arrays for their lengths, and a valid result address.
+        unsafe {
+            elements_around_of(
+                element.as_ptr(),
+                element.len() as Word,
+                first.as_mut_ptr(),
+                first.len() as Word,
+                around.as_mut_ptr(),
+                around.len() as Word,
+                &mut listed,
+            )
+        };
+        assert_eq!(listed, element.len() as Word);
+        let which: Vec<i32> = (0..18).collect();
+        let (mut count, mut at, mut weight, mut n) =
+            (vec![0i32; 18], vec![0i32; 1024], vec![0.0f64; 1024], 0);
+        // SAFETY: as above.
+        unsafe {
+            element_weights_of(
+                element.as_ptr(),
+                element.len() as Word,
+                point.as_ptr(),
+                point.len() as Word,
+                first.as_ptr(),
+                first.len() as Word,
+                around.as_ptr(),
+                around.len() as Word,
+                which.as_ptr(),
+                which.len() as Word,
+                count.as_mut_ptr(),
+                count.len() as Word,
+                at.as_mut_ptr(),
+                at.len() as Word,
+                weight.as_mut_ptr(),
+                weight.len() as Word,
+                &mut n,
+            )
+        };
+        assert!(n > 3 * 18, "curvature weights beyond the corners: {n}");
+        // the host's way
+        let mut dealt = Vec::new();
+        mesh_weights(&element, &point, |e, ws| {
+            assert_eq!(e, dealt.len());
+            dealt.push(ws.to_vec());
+        })
+        .expect("a valid mesh");
+        let mut k = 0;
+        for (e, ws) in dealt.iter().enumerate() {
+            assert_eq!(ws.len(), count[e] as usize, "element {e}'s weight count");
+            for &(v, x) in ws {
+                assert_eq!((v as i32, x.to_bits()), (at[k], weight[k].to_bits()));
+                k += 1;
+            }
+        }
+        assert_eq!(k, n as usize);
+        // a corner out of range is refused
+        assert!(mesh_weights(&[0, 1, 99], &point, |_, _| {}).is_none());
+    }
+
     #[test]
     fn an_element_listed_around_a_point_that_does_not_exist_is_refused() {
         let (element, point) = square();
