@@ -419,31 +419,35 @@ fn carm_overshoots_by_the_ambient_estimate_as_the_reference_solver() {
     assert_agree(&carm, &reference, "");
 }
 
-#[test]
-fn carm_refuses_what_it_cannot_do_clearly() {
-    let out = scratch("carm-refusals");
-    // carm.occ without its QUADRATIC capacity (refused before it is compiled)
-    std::fs::create_dir_all(&out).expect("a scratch folder");
+/// A copy of carm.occ in `out` (as `name`) without its capacity `capacity` (refused before it
+/// is compiled, so it needs no includes beside it); its path.
+fn carm_without(out: &std::path::Path, name: &str, capacity: &str) -> String {
     let program =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../programs/carm.occ"))
             .expect("carm.occ");
+    let declaration = format!("VAL INT {capacity} IS");
     let without: String = (program.lines())
-        .filter(|l| !l.starts_with("VAL INT QUADRATIC IS"))
+        .filter(|l| !l.starts_with(&declaration))
         .map(|l| format!("{l}\n"))
         .collect();
-    assert!(without.len() < program.len(), "carm.occ declares QUADRATIC");
-    let bare = out.join("no-quadratic.occ");
-    std::fs::write(&bare, without).expect("the copy");
-    let bare = bare.to_str().expect("a UTF-8 path");
-    // and without MESH.KEPT (the host's weights would be read as the next element)
-    let without: String = (program.lines())
-        .filter(|l| !l.starts_with("VAL INT MESH.KEPT IS"))
-        .map(|l| format!("{l}\n"))
-        .collect();
-    assert!(without.len() < program.len(), "carm.occ declares MESH.KEPT");
-    let unkept = out.join("no-mesh-kept.occ");
-    std::fs::write(&unkept, without).expect("the copy");
-    let unkept = unkept.to_str().expect("a UTF-8 path");
+    assert!(
+        without.len() < program.len(),
+        "carm.occ declares {capacity}"
+    );
+    let path = out.join(name);
+    std::fs::write(&path, without).expect("the copy");
+    path.to_str().expect("a UTF-8 path").to_owned()
+}
+
+#[test]
+fn carm_refuses_what_it_cannot_do_clearly() {
+    let out = scratch("carm-refusals");
+    std::fs::create_dir_all(&out).expect("a scratch folder");
+    let bare = carm_without(&out, "no-quadratic.occ", "QUADRATIC");
+    let bare = bare.as_str();
+    // (without MESH.KEPT the host's weights would be read as the next element)
+    let unkept = carm_without(&out, "no-mesh-kept.occ", "MESH.KEPT");
+    let unkept = unkept.as_str();
     for (flags, says) in [
         (
             &["--solver", "carm", "--no-adapt", "--until", "time=1"][..],
