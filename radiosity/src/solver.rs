@@ -192,8 +192,8 @@ pub struct SolverConfig {
     pub element_means: MeanRule,
     /// Leave the triangles that can hide nothing out of the octree the shadow rays are tested
     /// against ([`crate::analysis::occluders`]: those in faces of the scene's box that face
-    /// into it); false: every triangle, as carm.occ's octree holds them (its voxels carry the
-    /// scene's geometry as the paper distributes it). `all_stages` keeps them too.
+    /// into it); false: every triangle. carm.occ's voxels are this octree's, so they leave the
+    /// same triangles out. `all_stages` keeps them too.
     pub inert_faces: bool,
 }
 

@@ -755,7 +755,6 @@ fn solver_config(args: &Args, diag: f32, element_size: f32) -> SolverConfig {
         },
         channel_densities: !args.summed_density,
         element_means: element_means(args),
-        inert_faces: matches!(args.solver, SolverKind::Reference),
         ..SolverConfig::default()
     }
 }
