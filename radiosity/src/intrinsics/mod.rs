@@ -103,6 +103,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: weighted::source_density as *const u8,
     },
     Intrinsic {
+        name: "RAD.SOURCE.DENSITIES",
+        params: &[ValReal32s, ValReal32s, ValReal32s, VarReal32s, VarInts],
+        result: None,
+        addr: weighted::source_densities as *const u8,
+    },
+    Intrinsic {
         name: "RAD.SOURCE.SAMPLES.WEIGHTED.AT",
         params: &[
             ValReal32s, ValInt, ValInt, ValInt, ValReal32s, VarReal32s, VarReal32s, ResultInt,

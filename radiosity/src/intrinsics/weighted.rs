@@ -8,7 +8,9 @@
 use glam::Vec3;
 use occ_runtime::abi::Word;
 
-use super::{MAX_SAMPLES, MAX_SKIPPED_SETS, SAMPLE_STREAM, array, point, points, triangle};
+use super::{
+    MAX_SAMPLES, MAX_SKIPPED_SETS, SAMPLE_STREAM, array, array_mut, point, points, triangle,
+};
 use crate::formfactor::{
     Facing, FormFactorConfig, SourceDensity, form_factor_weighted, receiver_samples, sample_grid,
     source_samples_weighted,
@@ -45,37 +47,103 @@ pub unsafe extern "C" fn source_density(
     grid_len: Word,
     cells: *mut Word,
 ) {
-    // SAFETY: the ABI passes valid arrays.
-    let (patch, elements, density) = unsafe {
-        (
-            triangle(array(patch, patch_len)),
+    // SAFETY: the ABI passes valid arrays, and a valid result address.
+    unsafe {
+        let (patch, elements, density) = (
+            array(patch, patch_len),
             array(elements, elements_len),
             array(density, density_len),
+        );
+        let grid = array_mut(grid, grid_len);
+        *cells = match densities(patch, elements, density, grid) {
+            Some([n]) => Word::from(n),
+            None => -1,
+        };
+    }
+}
+
+/// `PROC RAD.SOURCE.DENSITIES (VAL []REAL32 patch, VAL []REAL32 elements, VAL []REAL32
+/// densities, []REAL32 grids, []INT cells)`: `RAD.SOURCE.DENSITY` of n densities over the same
+/// k elements at once (n = `SIZE cells`, 1 to 4; the controller tabulates a shot's channels
+/// summed and each channel, as the reference solver does), sharing the search of which element
+/// holds each cell. `densities` holds n·k floats, density j's k at `[j·k]`; density j's grid goes
+/// to `grids` at `[j·DENSITY_CELLS]` and its cell count (or 0 for a uniform source) to `cells[j]`,
+/// each exactly what `RAD.SOURCE.DENSITY` makes of it. Every `cells[j]` is -1 (nothing else
+/// written) when a length is wrong (`grids` shorter than n·[`DENSITY_CELLS`] included).
+///
+/// # Safety
+/// The arrays are valid for their lengths (the occam ABI).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn source_densities(
+    patch: *const f32,
+    patch_len: Word,
+    elements: *const f32,
+    elements_len: Word,
+    densities_in: *const f32,
+    densities_len: Word,
+    grids: *mut f32,
+    grids_len: Word,
+    cells: *mut i32,
+    cells_len: Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (patch, elements, values, grids, cells) = unsafe {
+        (
+            array(patch, patch_len),
+            array(elements, elements_len),
+            array(densities_in, densities_len),
+            array_mut(grids, grids_len),
+            array_mut(cells, cells_len),
         )
     };
-    let parts = (elements.len() == 9 * density.len()).then(|| {
-        elements
-            .chunks_exact(9)
-            .zip(density)
-            .map(|(t, &d)| triangle(t).map(|t| (t, d)))
-            .collect::<Option<Vec<(Tri, f32)>>>()
-    });
-    let written = match (patch, parts.flatten()) {
-        (Some(patch), Some(parts)) if grid_len >= DENSITY_CELLS => {
-            match SourceDensity::of_parts(&patch, DENSITY_GRID, &parts) {
-                Some(d) => {
-                    // SAFETY: `grid` is valid for `grid_len` >= DENSITY_CELLS floats.
-                    let out = unsafe { std::slice::from_raw_parts_mut(grid, d.cells().len()) };
-                    out.copy_from_slice(d.cells());
-                    DENSITY_CELLS
-                }
-                None => 0,
-            }
-        }
-        _ => -1,
+    let written: Option<Vec<i32>> = match cells.len() {
+        1 => densities::<1>(patch, elements, values, grids).map(Vec::from),
+        2 => densities::<2>(patch, elements, values, grids).map(Vec::from),
+        3 => densities::<3>(patch, elements, values, grids).map(Vec::from),
+        4 => densities::<4>(patch, elements, values, grids).map(Vec::from),
+        _ => None,
     };
-    // SAFETY: the ABI passes a valid result address.
-    unsafe { *cells = written };
+    match written {
+        Some(n) => cells.copy_from_slice(&n),
+        None => cells.fill(-1),
+    }
+}
+
+/// Tabulates `N` densities of the k elements (`elements`: 9k floats; `values`: N·k, density j's
+/// at `[j·k]`) over `patch` (9 floats) into `grids` (density j's at `[j·DENSITY_CELLS]`), as
+/// [`SourceDensity::of_parts_sets`]; answers each density's cell count (0: uniform, its grid
+/// untouched), or `None`, writing nothing, when a length is wrong.
+fn densities<const N: usize>(
+    patch: &[f32],
+    elements: &[f32],
+    values: &[f32],
+    grids: &mut [f32],
+) -> Option<[i32; N]> {
+    let patch = triangle(patch)?;
+    let k = elements.len() / 9;
+    let cells = DENSITY_CELLS as usize;
+    if elements.len() != 9 * k || values.len() != N * k || grids.len() < N * cells {
+        return None;
+    }
+    let parts = (elements.chunks_exact(9).enumerate())
+        .map(|(i, t)| Some((triangle(t)?, std::array::from_fn(|j| values[j * k + i]))))
+        .collect::<Option<Vec<(Tri, [f32; N])>>>()?;
+    let tabled = SourceDensity::of_parts_sets(&patch, DENSITY_GRID, &parts);
+    let mut written = [0; N];
+    for ((d, grid), n) in tabled
+        .iter()
+        .zip(grids.chunks_exact_mut(cells))
+        .zip(&mut written)
+    {
+        if let Some(d) = d {
+            grid[..d.cells().len()].copy_from_slice(d.cells());
+            *n = DENSITY_CELLS as i32;
+        }
+    }
+    Some(written)
 }
 
 /// `PROC RAD.SOURCE.SAMPLES.WEIGHTED.AT (VAL []REAL32 tri, VAL INT m, VAL INT64 seed,
@@ -341,4 +409,118 @@ unsafe fn write_samples(
         unsafe { std::slice::from_raw_parts_mut(weights, w.len()) }.copy_from_slice(w);
     }
     samples.len() as Word
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit square's patch split into a fan of elements around an inner point.
+    fn fan() -> (Vec<f32>, Vec<f32>) {
+        let [a, b, c] = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let m = Vec3::new(0.3, 0.3, 0.0);
+        let patch: Vec<f32> = [a, b, c].iter().flat_map(|v| v.to_array()).collect();
+        let elements = [[a, b, m], [b, c, m], [c, a, m]]
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_array())
+            .collect();
+        (patch, elements)
+    }
+
+    fn one(patch: &[f32], elements: &[f32], density: &[f32]) -> (Word, Vec<f32>) {
+        let (mut grid, mut cells) = (vec![7.0; DENSITY_CELLS as usize], 0);
+        // SAFETY: valid arrays and result.
+        unsafe {
+            source_density(
+                patch.as_ptr(),
+                patch.len() as Word,
+                elements.as_ptr(),
+                elements.len() as Word,
+                density.as_ptr(),
+                density.len() as Word,
+                grid.as_mut_ptr(),
+                grid.len() as Word,
+                &mut cells,
+            )
+        };
+        (cells, grid)
+    }
+
+    fn many(patch: &[f32], elements: &[f32], values: &[f32], n: usize) -> (Vec<i32>, Vec<f32>) {
+        let (mut grids, mut cells) = (vec![7.0; n * DENSITY_CELLS as usize], vec![5; n]);
+        // SAFETY: valid arrays.
+        unsafe {
+            source_densities(
+                patch.as_ptr(),
+                patch.len() as Word,
+                elements.as_ptr(),
+                elements.len() as Word,
+                values.as_ptr(),
+                values.len() as Word,
+                grids.as_mut_ptr(),
+                grids.len() as Word,
+                cells.as_mut_ptr(),
+                n as Word,
+            )
+        };
+        (cells, grids)
+    }
+
+    #[test]
+    fn densities_at_once_are_each_density_alone() {
+        let (patch, elements) = fan();
+        // the sum of the channels, then three channels: one uniform, two not
+        let sets = [
+            [3.0, 1.0, 2.0],
+            [1.0, 1.0, 1.0],
+            [1.5, 0.0, 0.5],
+            [0.5, 0.0, 0.5],
+        ];
+        let values: Vec<f32> = sets.iter().flatten().copied().collect();
+        let (cells, grids) = many(&patch, &elements, &values, 4);
+        for (j, set) in sets.iter().enumerate() {
+            let (alone, grid) = one(&patch, &elements, set);
+            assert_eq!(Word::from(cells[j]), alone, "density {j}'s cells");
+            let at = j * DENSITY_CELLS as usize;
+            assert_eq!(
+                &grids[at..at + DENSITY_CELLS as usize],
+                &grid[..],
+                "density {j}"
+            );
+        }
+        let full = DENSITY_CELLS as i32;
+        assert_eq!(cells, [full, 0, full, full]);
+    }
+
+    #[test]
+    fn densities_of_wrong_lengths_write_nothing() {
+        let (patch, elements) = fan();
+        let untouched = vec![7.0; 2 * DENSITY_CELLS as usize];
+        // one value short, and five densities
+        for (values, n) in [(vec![1.0; 5], 2), (vec![1.0; 15], 5)] {
+            let (cells, grids) = many(&patch, &elements, &values, n);
+            assert!(cells.iter().all(|&c| c == -1), "{cells:?}");
+            assert_eq!(&grids[..2 * DENSITY_CELLS as usize], &untouched[..]);
+        }
+        // grids one cell short
+        let values = vec![1.0, 2.0, 3.0];
+        let (mut grids, mut cells) = (vec![7.0; DENSITY_CELLS as usize - 1], [5]);
+        // SAFETY: valid arrays.
+        unsafe {
+            source_densities(
+                patch.as_ptr(),
+                9,
+                elements.as_ptr(),
+                27,
+                values.as_ptr(),
+                3,
+                grids.as_mut_ptr(),
+                grids.len() as Word,
+                cells.as_mut_ptr(),
+                1,
+            )
+        };
+        assert_eq!(cells, [-1]);
+    }
 }
