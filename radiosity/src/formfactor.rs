@@ -842,11 +842,7 @@ pub fn form_factor_sets<const N: usize>(
     config: &FormFactorConfig,
     occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
 ) -> (FormFactor, [f32; N]) {
-    if !faces(p, n, src) {
-        return (FormFactor::default(), [0.0; N]);
-    }
-    let facing = Facing::new(src);
-    form_factor_facing(p, n, &facing, samples, weights, config, occluded)
+    Facing::new(src).form_factor_sets(p, n, samples, weights, config, occluded)
 }
 
 /// A source as [`form_factor_facing`] takes it: its triangle with its unit normal and area,
@@ -873,6 +869,23 @@ impl<'t> Facing<'t> {
         let v = &self.src.v;
         let rounding = 8.0 * f32::EPSILON * (p.abs().max_element() + v[0].abs().max_element());
         self.normal.dot(p - v[0]) > rounding && v.iter().any(|v| n.dot(*v - p) > 0.0)
+    }
+
+    /// [`form_factor_sets`] from the receiver `(p, n)` to this source (worked out once for a
+    /// batch of receivers).
+    pub fn form_factor_sets<const N: usize>(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        samples: &[Vec3],
+        weights: impl SampleWeights<N>,
+        config: &FormFactorConfig,
+        occluded: impl FnMut(usize, Vec3, Vec3, f32) -> bool,
+    ) -> (FormFactor, [f32; N]) {
+        if !self.faced_by(p, n) {
+            return (FormFactor::default(), [0.0; N]);
+        }
+        form_factor_facing(p, n, self, samples, weights, config, occluded)
     }
 
     /// [`receiver_rays`] of the receiver `(p, n)` and the source's point nearest it, or `None`

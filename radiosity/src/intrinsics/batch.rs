@@ -14,8 +14,8 @@ use super::{
     MAX_SAMPLES, RAY_FLOATS, SAMPLE_STREAM, array, array_mut, facing_receiver_rays, triangle,
 };
 use crate::formfactor::{
-    DensitySet, Facing, FormFactorConfig, SampleWeights, SourceDensity, form_factor_sets,
-    form_factor_weighted, receiver_samples, receiver_samples_sets, sample_grid,
+    DensitySet, Facing, FormFactorConfig, SampleWeights, SourceDensity, receiver_samples,
+    receiver_samples_sets, sample_grid,
 };
 use crate::geom::Tri;
 use crate::octree::flat::{CURSOR_INTS, START};
@@ -370,7 +370,7 @@ pub unsafe extern "C" fn receivers_form_factors(
         samples,
         valid,
     };
-    let written = batch.each(tri, f, 1, |p, n, tri, s, span, o| {
+    let written = batch.each(tri, f, 1, |p, n, facing, s, span, o| {
         let w = if weights.is_empty() {
             &[][..]
         } else {
@@ -378,7 +378,8 @@ pub unsafe extern "C" fn receivers_form_factors(
         };
         let seen = &blocked[span];
         let config = FormFactorConfig::default();
-        o[0] = form_factor_weighted(p, n, tri, s, w, &config, |k, _, _, _| seen[k] != 0).value;
+        let seen = |k: usize, _, _, _| seen[k] != 0;
+        o[0] = facing.form_factor_sets(p, n, s, w, &config, seen).0.value;
     });
     // SAFETY: the ABI passes a valid result address.
     unsafe { *count = written };
@@ -444,7 +445,7 @@ pub unsafe extern "C" fn receivers_form_factors_sets(
         samples,
         valid,
     };
-    let written = batch.each(tri, f, 4, |p, n, tri, s, span, o| {
+    let written = batch.each(tri, f, 4, |p, n, facing, s, span, o| {
         let from = span.start;
         let planes = Planes {
             weights,
@@ -455,7 +456,7 @@ pub unsafe extern "C" fn receivers_form_factors_sets(
         let seen = &blocked[span];
         let config = FormFactorConfig::default();
         let (_, values) =
-            form_factor_sets(p, n, tri, s, planes, &config, |k, _, _, _| seen[k] != 0);
+            facing.form_factor_sets(p, n, s, planes, &config, |k, _, _, _| seen[k] != 0);
         o.copy_from_slice(&values);
     });
     // SAFETY: the ABI passes a valid result address.
@@ -472,7 +473,7 @@ struct Taken<'a> {
 }
 
 impl Taken<'_> {
-    /// Calls `weigh(p, n, tri, samples, span, out)` for each receiver with samples (`span`:
+    /// Calls `weigh(p, n, source, samples, span, out)` for each receiver with samples (`span`:
     /// their indices), `out` its `per` values of `f` (zeros for a receiver without samples);
     /// answers the receivers done, or -1 when the arrays do not agree.
     fn each(
@@ -480,7 +481,7 @@ impl Taken<'_> {
         tri: Option<Tri>,
         f: &mut [f32],
         per: usize,
-        mut weigh: impl FnMut(Vec3, Vec3, &Tri, &[Vec3], std::ops::Range<usize>, &mut [f32]),
+        mut weigh: impl FnMut(Vec3, Vec3, &Facing, &[Vec3], std::ops::Range<usize>, &mut [f32]),
     ) -> Word {
         let Taken {
             points,
@@ -500,6 +501,7 @@ impl Taken<'_> {
         let Some(tri) = tri.filter(|_| valid) else {
             return -1;
         };
+        let facing = Facing::new(&tri);
         let each = points.chunks_exact(RECEIVER_FLOATS).zip(first.windows(2));
         let mut s = Vec::new();
         for ((floats, span), o) in each.zip(f.chunks_exact_mut(per)) {
@@ -511,7 +513,7 @@ impl Taken<'_> {
             let (p, n) = receiver(floats);
             s.clear();
             s.extend(samples[3 * a..3 * b].chunks_exact(3).map(Vec3::from_slice));
-            weigh(p, n, &tri, &s, a..b, o);
+            weigh(p, n, &facing, &s, a..b, o);
         }
         r as Word
     }
