@@ -582,6 +582,76 @@ pub unsafe extern "C" fn points_receive(
     unsafe { *count = written };
 }
 
+/// `PROC RAD.POINTS.RECEIVE.GATHERED (VAL []REAL32 factor, db, []REAL32 irradiance, []REAL64
+/// gathered, RESULT INT count)`: `RAD.POINTS.RECEIVE` that also keeps what each point has
+/// gathered in REAL64 (the sum over shots of `db · factor`, from which carm.occ settles its
+/// corners' unshot power lazily). `factor` holds one form factor a point (n) or one a channel
+/// (3n: point i's channel j at `3i + j`, a shot whose channels shoot apart); with `f` point i's
+/// factor for channel j, `irradiance[3i + j]` gains `db[j] · f` in REAL32 and, where `f` is not
+/// 0, `gathered[3i + j]` gains `db[j] · f` in REAL64. `count` is n, or -1 (nothing written) when
+/// `db` is not 3 floats, or `irradiance` and `gathered` are not both 3n.
+///
+/// # Safety
+/// The arrays are valid for their lengths and `count` for one word (the occam ABI); the
+/// written arrays do not overlap.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the occam ABI: address and length per array"
+)]
+pub unsafe extern "C" fn points_receive_gathered(
+    factor: *const f32,
+    factor_len: Word,
+    db: *const f32,
+    db_len: Word,
+    irradiance: *mut f32,
+    irradiance_len: Word,
+    gathered: *mut f64,
+    gathered_len: Word,
+    count: *mut Word,
+) {
+    // SAFETY: the ABI passes valid arrays.
+    let (factor, db, irradiance, gathered) = unsafe {
+        (
+            array(factor, factor_len),
+            array(db, db_len),
+            array_mut(irradiance, irradiance_len),
+            array_mut(gathered, gathered_len),
+        )
+    };
+    let n = irradiance.len() / 3;
+    let per_channel = factor.len() == 3 * n;
+    let valid = db.len() == 3
+        && irradiance.len() == 3 * n
+        && gathered.len() == 3 * n
+        && (per_channel || factor.len() == n);
+    let written = if valid {
+        let at = |i: usize, j: usize| {
+            if per_channel {
+                factor[3 * i + j]
+            } else {
+                factor[i]
+            }
+        };
+        let each = irradiance
+            .chunks_exact_mut(3)
+            .zip(gathered.chunks_exact_mut(3));
+        for (i, (h, g)) in each.enumerate() {
+            for j in 0..3 {
+                let f = at(i, j);
+                h[j] += db[j] * f;
+                if f != 0.0 {
+                    g[j] += f64::from(db[j]) * f64::from(f);
+                }
+            }
+        }
+        n as Word
+    } else {
+        -1
+    };
+    // SAFETY: the ABI passes a valid result address.
+    unsafe { *count = written };
+}
+
 /// `PROC RAD.CORNERS.RECEIVE (VAL []INT point, patch, VAL []REAL64 weight, VAL []REAL32 factor,
 /// VAL []REAL32 db, rho, []REAL64 received, unshot, RESULT INT count)`: books a shot of `db`
 /// (RGB radiosity) at the n element corners a node holds. Corner c sits at sample point
@@ -1324,6 +1394,80 @@ mod test {
         assert_eq!(receive(bad_patch, &factor, &rho, &mut r, &mut u), -1);
         assert_eq!(receive(corners, &factor, &rho, &mut r, &mut u[..8]), -1);
         assert!(r.iter().chain(&u).all(|&x| x == 7.0));
+    }
+
+    #[test]
+    fn points_receive_gathered_books_as_the_points_and_gathers_in_real64() {
+        type Receive = unsafe extern "C" fn(
+            *const f32,
+            Word,
+            *const f32,
+            Word,
+            *mut f32,
+            Word,
+            *mut f64,
+            Word,
+            *mut Word,
+        );
+        // SAFETY: the table says this is the signature.
+        let f: Receive = unsafe { std::mem::transmute(entry("RAD.POINTS.RECEIVE.GATHERED")) };
+        let call = |factor: &[f32], db: &[f32], h: &mut [f32], g: &mut [f64]| {
+            let mut count = 0;
+            // SAFETY: valid slices and result.
+            unsafe {
+                f(
+                    factor.as_ptr(),
+                    factor.len() as Word,
+                    db.as_ptr(),
+                    db.len() as Word,
+                    h.as_mut_ptr(),
+                    h.len() as Word,
+                    g.as_mut_ptr(),
+                    g.len() as Word,
+                    &mut count,
+                )
+            };
+            count
+        };
+        let db = [2.0, 4.0, 0.1];
+        // one factor a point: the same irradiance as RAD.POINTS.RECEIVE, gathered in REAL64
+        let (mut h, mut g) = ([1.0, 2.0, 3.0, 0.0, 0.0, 0.0], [0.5; 6]);
+        assert_eq!(call(&[0.3, 0.0], &db, &mut h, &mut g), 2);
+        assert_eq!(
+            h,
+            [
+                1.0 + 2.0 * 0.3,
+                2.0 + 4.0 * 0.3,
+                3.0 + 0.1 * 0.3,
+                0.0,
+                0.0,
+                0.0
+            ]
+        );
+        let want = |d: f32, f: f32| 0.5 + f64::from(d) * f64::from(f);
+        assert_eq!(
+            g,
+            [
+                want(2.0, 0.3),
+                want(4.0, 0.3),
+                want(0.1, 0.3),
+                0.5,
+                0.5,
+                0.5
+            ]
+        );
+        // one a channel
+        let (mut h, mut g) = ([0.0; 6], [0.0; 6]);
+        let factor = [0.25, 0.0, 0.5, 1.0, 2.0, 0.0];
+        assert_eq!(call(&factor, &db, &mut h, &mut g), 2);
+        assert_eq!(h, [0.5, 0.0, 0.05, 2.0, 8.0, 0.0]);
+        assert_eq!(g, [0.5, 0.0, f64::from(0.1f32) * 0.5, 2.0, 8.0, 0.0]);
+        // refused: db short, irradiance and gathered apart, a factor count neither n nor 3n
+        let (mut h, mut g) = ([7.0; 6], [7.0; 6]);
+        assert_eq!(call(&[0.5, 0.5], &db[..2], &mut h, &mut g), -1);
+        assert_eq!(call(&[0.5, 0.5], &db, &mut h, &mut g[..3]), -1);
+        assert_eq!(call(&[0.5; 4], &db, &mut h, &mut g), -1);
+        assert!(h.iter().all(|&x| x == 7.0) && g.iter().all(|&x| x == 7.0));
     }
 
     #[test]

@@ -227,6 +227,12 @@ pub static INTRINSICS: &[Intrinsic] = &[
         addr: batch::points_receive as *const u8,
     },
     Intrinsic {
+        name: "RAD.POINTS.RECEIVE.GATHERED",
+        params: &[ValReal32s, ValReal32s, VarReal32s, VarReal64s, ResultInt],
+        result: None,
+        addr: batch::points_receive_gathered as *const u8,
+    },
+    Intrinsic {
         name: "RAD.CORNERS.RECEIVE",
         params: &[
             ValInts, ValInts, ValReal64s, ValReal32s, ValReal32s, ValReal32s, VarReal64s,
