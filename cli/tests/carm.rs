@@ -532,7 +532,15 @@ fn carm_reports_in_parts_give_the_same_solution() {
     let program = copy.join("carm.occ");
     let program = program.to_str().expect("a UTF-8 path");
     let lamp = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
-    let lamp = [lamp, "--no-adapt", "--rays", "4", "--until", "unshot=0.05"];
+    let lamp = [
+        lamp,
+        "--all-stages",
+        "--no-adapt",
+        "--rays",
+        "4",
+        "--until",
+        "unshot=0.05",
+    ];
     let spread = ["--node-memory", "2112", "--cache", "1056"];
     for (name, settings, nodes) in [
         ("cornell-4", SETTINGS.to_vec(), "4"),
@@ -707,10 +715,11 @@ fn carm_spreads_a_many_voxel_scene_with_an_eighth_of_it_a_node() {
 }
 
 /// The Cornell box in voxels of at most eight triangles (`--voxel-triangles`; its default
-/// octree is one voxel), spread so that no node keeps more than an eighth of them.
+/// octree is one voxel), every triangle in them (`--all-stages`: the box's walls can hide
+/// nothing, and would be left out), spread so that no node keeps more than an eighth of them.
 #[test]
 fn carm_spreads_the_cornell_box_with_an_eighth_of_it_a_node() {
-    let settings = [SETTINGS, &["--voxel-triangles", "8"][..]].concat();
+    let settings = [SETTINGS, &["--voxel-triangles", "8", "--all-stages"][..]].concat();
     let spread = assert_spread_agrees("carm-cornell-spread", &settings, |all| (all / 8, all / 16));
     assert!(
         spread["scene"]["octree"]["leaves"].as_u64() > Some(16),
@@ -739,10 +748,17 @@ fn carm_poaching_moves_receivers_and_not_the_solution() {
         ["--node-memory", "2112", "--cache", "1056"],
         ["--node-memory", "4224", "--cache", "2112"],
     );
-    // the Cornell box in voxels of at most 8 triangles (16,752 bytes), an eighth a node
+    // the Cornell box in voxels of at most 8 triangles, all 32 of them (16,752 bytes), an
+    // eighth a node
     let cornell = [
         SETTINGS,
-        &["--until", "unshot=0.05", "--voxel-triangles", "8"],
+        &[
+            "--until",
+            "unshot=0.05",
+            "--voxel-triangles",
+            "8",
+            "--all-stages",
+        ],
     ]
     .concat();
     let cornell_spread = ["--node-memory", "2094", "--cache", "1047"];
@@ -781,11 +797,11 @@ fn carm_poaching_moves_receivers_and_not_the_solution() {
 
 /// A node's tasks and threads take its receivers in turn, and its database manager walks their
 /// rays, parking a batch that waits for voxels while the others go on: with the Cornell box
-/// spread (an eighth of it a node), two tasks and two threads a node give the very solution one
-/// task gives, and every node's walks still fetch.
+/// spread (an eighth of it a node, every triangle in the octree), two tasks and two threads a
+/// node give the very solution one task gives, and every node's walks still fetch.
 #[test]
 fn carm_tasks_and_threads_give_the_same_solution() {
-    let settings = [SETTINGS, &["--voxel-triangles", "8"][..]].concat();
+    let settings = [SETTINGS, &["--voxel-triangles", "8", "--all-stages"][..]].concat();
     let carm = ["--solver", "carm", "--nodes", "4", "--threads", "1"];
     let replicated = solve(&scratch("carm-walkers-replicated"), &settings, &carm);
     let all = all_voxel_bytes(&replicated);
@@ -810,6 +826,7 @@ fn carm_refuses_bad_voxel_budgets_by_name() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
     let carm = [
         scene,
+        "--all-stages",
         "--solver",
         "carm",
         "--no-adapt",

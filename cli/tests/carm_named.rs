@@ -135,7 +135,7 @@ fn named_spreads_a_many_voxel_scene_with_an_eighth_of_it_a_node() {
 #[test]
 fn named_refuses_a_cache_too_small_for_its_halves() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj");
-    let settings = [scene, "--no-adapt", "--until", "shots=1"];
+    let settings = [scene, "--all-stages", "--no-adapt", "--until", "shots=1"];
     let flags = [
         "--program",
         NAMED,

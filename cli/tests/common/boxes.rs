@@ -3,8 +3,11 @@
 use std::path::Path;
 
 /// The settings the boxes scene is solved with (after the scene's path): a coarse mesh, few
-/// rays and an early stop, so that a debug build spreads it over the nodes in seconds.
-pub const BOXES_SETTINGS: [&str; 9] = [
+/// rays and an early stop, so that a debug build spreads it over the nodes in seconds; every
+/// triangle in the octree (`--all-stages`: the room's walls can hide nothing and would be left
+/// out), for the tests of spread geometry.
+pub const BOXES_SETTINGS: [&str; 10] = [
+    "--all-stages",
     "--no-adapt",
     "--rays",
     "4",

@@ -51,9 +51,12 @@ pub const CORNELL_COARSE: [&str; 7] = [
     "16",
 ];
 
-/// The table lamp (an octree of eight voxels) at the settings both solvers run it with.
-pub const LAMP: [&str; 10] = [
+/// The table lamp (an octree of eight voxels) at the settings both solvers run it with. Its
+/// room's walls, floor and ceiling can hide nothing, and the octree would leave them out (one
+/// voxel); `--all-stages` keeps every triangle in it, for the tests of spread geometry.
+pub const LAMP: [&str; 11] = [
     concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/table-lamp.obj"),
+    "--all-stages",
     "--no-adapt",
     "--rays",
     "4",
