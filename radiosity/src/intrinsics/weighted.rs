@@ -504,7 +504,7 @@ mod tests {
             assert_eq!(&grids[..2 * DENSITY_CELLS as usize], &untouched[..]);
         }
         // grids one cell short
-        let values = vec![1.0, 2.0, 3.0];
+        let values = [1.0, 2.0, 3.0];
         let (mut grids, mut cells) = (vec![7.0; DENSITY_CELLS as usize - 1], [5]);
         // SAFETY: valid arrays.
         unsafe {
