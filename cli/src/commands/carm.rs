@@ -471,6 +471,7 @@ fn capacities(
             node_patches(
                 mesh,
                 (rule, supports, corners_at),
+                coherence_grid(flat, settings),
                 settings.nodes,
                 node_points,
                 node_corners,
@@ -569,13 +570,14 @@ fn capacities(
 fn node_patches(
     mesh: &Mesh,
     (rule, supports, corners_at): (MeanRule, &Supports, &[usize]),
+    grid: [f32; 4],
     nodes: usize,
     node_points: usize,
     node_corners: usize,
     adapt: bool,
 ) -> usize {
     let all = mesh.patches.len();
-    let Some(dealt) = deal(mesh, corners_at, nodes, node_points, node_corners) else {
+    let Some(dealt) = deal(mesh, (corners_at, grid), nodes, node_points, node_corners) else {
         return all;
     };
     // The elements go grouped by patch (host_input), so a node's patches come one after another.
@@ -616,13 +618,13 @@ struct Dealt {
 }
 
 /// The controller's dealing of the mesh's sample points, in order: each to its hash's node
-/// (`owner`), unless that node is full (`node_points` points, or `node_corners` corners with
-/// the point's `corners_at`); then to a re-hash's, and after as many re-hashes as nodes, to the next node
-/// with room (never the root when there are others). `None` when no node has room for some
-/// point.
+/// (`owner`, by the coherence `grid`), unless that node is full (`node_points` points, or
+/// `node_corners` corners with the point's `corners_at`); then to a re-hash's, and after as many
+/// re-hashes as nodes, to the next node with room (never the root when there are others).
+/// `None` when no node has room for some point.
 fn deal(
     mesh: &Mesh,
-    corners_at: &[usize],
+    (corners_at, grid): (&[usize], [f32; 4]),
     nodes: usize,
     node_points: usize,
     node_corners: usize,
@@ -637,12 +639,12 @@ fn deal(
             v.pos.x, v.pos.y, v.pos.z, v.normal.x, v.normal.y, v.normal.z,
         ];
         let full = |k: usize| points[k] >= node_points || dealt.corners[k] + c > node_corners;
-        let mut at = owner(pn, nodes, 0);
+        let mut at = owner(pn, grid, nodes, 0);
         let mut attempt = 0;
         while full(at) {
             attempt += 1;
             if attempt < nodes {
-                at = owner(pn, nodes, attempt);
+                at = owner(pn, grid, nodes, attempt);
             } else if attempt < 2 * nodes {
                 at = (at + 1) % nodes;
                 if at == 0 && nodes > 1 {
@@ -659,15 +661,43 @@ fn deal(
     Some(dealt)
 }
 
+/// Cells an axis of the coherence grid over the octree's root box (`coherence_grid`).
+/// Measured on the generated rooms spread over 13 nodes (programs/README.md, "Coherent
+/// placement"): 8 fetched the fewest voxels of 4, 8, 16, 32 and 64.
+pub const COHERENCE_CELLS: u32 = 8;
+
+/// The grid whose cells' sample points the controller deals to one node (carm-common.inc's
+/// `coherence.key`): its low corner and cell edge, [`COHERENCE_CELLS`] cells an axis over the
+/// octree's root box, when the voxels are spread, where a node's points that lie together need
+/// fewer voxels fetched; an edge of 0 (each point dealt by its own hash, spreading the work of
+/// every shot evenly) when every node holds every voxel.
+fn coherence_grid(flat: &FlatOctree, settings: &CarmSettings) -> [f32; 4] {
+    let depth = flat.tree.first().copied().unwrap_or(0).clamp(0, 30);
+    match (&settings.memory, &flat.frame[..]) {
+        (Some(_), &[x, y, z, cell]) => {
+            let root = cell * (1u32 << depth) as f32;
+            [x, y, z, root / COHERENCE_CELLS as f32]
+        }
+        _ => [0.0; 4],
+    }
+}
+
 /// The node of `nodes` that the controller's `owner` (carm-common.inc) names for a sample point
-/// of position and normal `pn` at this attempt (0: the first choice): an FNV-style hash of
-/// the six floats' bits, as occam's INT64 arithmetic computes it, over the nodes but the root
-/// when there are others.
-fn owner(pn: [f32; 6], nodes: usize, attempt: usize) -> usize {
+/// of position and normal `pn` at this attempt (0: the first choice): an FNV-style hash, as
+/// occam's INT64 arithmetic computes it, of the point's coherence key (`coherence_key`) when
+/// the `grid` has an edge, else of the six floats' bits, over the nodes but the root when
+/// there are others.
+fn owner(pn: [f32; 6], grid: [f32; 4], nodes: usize, attempt: usize) -> usize {
     let mut h = 1_469_598_103_934_665_603u64 ^ attempt as u64;
-    for x in pn {
-        // INT64 of an INT32 extends its sign
-        h = (h ^ i64::from(x.to_bits() as i32) as u64).wrapping_mul(1_099_511_628_211);
+    if grid[3] > 0.0 {
+        for k in coherence_key(pn, grid) {
+            h = (h ^ k as u64).wrapping_mul(1_099_511_628_211);
+        }
+    } else {
+        for x in pn {
+            // INT64 of an INT32 extends its sign
+            h = (h ^ i64::from(x.to_bits() as i32) as u64).wrapping_mul(1_099_511_628_211);
+        }
     }
     h ^= h >> 29;
     h = h.wrapping_mul(2_654_435_761);
@@ -677,6 +707,32 @@ fn owner(pn: [f32; 6], nodes: usize, attempt: usize) -> usize {
     } else {
         0
     }
+}
+
+/// carm-common.inc's `coherence.key`: the cell of `grid` (low corner, edge) holding the point
+/// `pn` (position, normal), each index clamped to 0 ..= 2^20, and the axis and sign its normal
+/// points most along (0 to 5), in REAL32 as occam computes them.
+fn coherence_key(pn: [f32; 6], grid: [f32; 4]) -> [i32; 4] {
+    const TOP: i32 = 1 << 20;
+    let cell = |j: usize| {
+        let x = (pn[j] - grid[j]) / grid[3];
+        if !(x > 0.0) {
+            0
+        } else if x >= TOP as f32 {
+            TOP
+        } else {
+            x as i32
+        }
+    };
+    let most = (1..3).fold(0, |m, j| {
+        if pn[3 + j].abs() > pn[3 + m].abs() {
+            j
+        } else {
+            m
+        }
+    });
+    let facing = 2 * most as i32 + i32::from(pn[3 + most] < 0.0);
+    [cell(0), cell(1), cell(2), facing]
 }
 
 /// The most sample points the run may have: the mesh's, or with adaptive subdivision
@@ -935,6 +991,9 @@ fn host_input(
         w.int(o as i32);
         w.int(back.len() as i32);
         back.iter().for_each(|&x| w.real32(x));
+    }
+    for x in coherence_grid(flat, settings) {
+        w.real32(x);
     }
     for (v, &c) in mesh.vertices.iter().zip(corners_at) {
         w.vec3(v.pos);
@@ -1802,5 +1861,55 @@ impl std::io::Write for SharedBuf {
     }
     fn flush(&mut self) -> std::io::Result<()> {
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GRID: [f32; 4] = [-1.0, -1.0, -1.0, 0.5];
+
+    #[test]
+    fn a_coherence_key_is_the_cell_and_the_facing() {
+        let up = [0.2, 0.9, 0.3];
+        let at =
+            |p: [f32; 3], n: [f32; 3]| coherence_key([p[0], p[1], p[2], n[0], n[1], n[2]], GRID);
+        // (-1, -1, -1) is the grid's corner: cells of 0.5
+        assert_eq!(at([0.1, -0.9, 0.4], up), [2, 0, 2, 2]);
+        assert_eq!(
+            at([0.4, -0.6, 0.1], up),
+            [2, 0, 2, 2],
+            "the same cell and facing"
+        );
+        assert_eq!(at([0.6, -0.9, 0.4], up), [3, 0, 2, 2], "the next cell in x");
+        // the axis and sign the normal points most along: +x 0, -x 1, +y 2, -y 3, +z 4, -z 5
+        for (n, facing) in [
+            ([0.9, 0.1, 0.0], 0),
+            ([-0.9, 0.1, 0.0], 1),
+            ([0.1, -0.9, 0.2], 3),
+            ([0.1, 0.2, 0.9], 4),
+            ([0.1, 0.2, -0.9], 5),
+        ] {
+            assert_eq!(at([0.0; 3], n)[3], facing, "{n:?}");
+        }
+        // outside the grid, or not a number: clamped
+        assert_eq!(at([-5.0, 1e30, f32::NAN], up), [0, 1 << 20, 0, 2]);
+    }
+
+    #[test]
+    fn the_points_of_a_region_share_every_choice_of_node() {
+        let point = |x: f32, z: f32| [x, -0.9, z, 0.0, 1.0, 0.0];
+        let (a, b) = (point(0.05, 0.05), point(0.45, 0.3));
+        assert_eq!(coherence_key(a, GRID), coherence_key(b, GRID));
+        for attempt in 0..13 {
+            assert_eq!(owner(a, GRID, 13, attempt), owner(b, GRID, 13, attempt));
+        }
+        // without a grid each point is hashed by its own bits, never to the root
+        let keepers: std::collections::BTreeSet<_> = (0..64)
+            .map(|i| owner(point(0.01 * i as f32, 0.1), [0.0; 4], 13, 0))
+            .collect();
+        assert!(keepers.len() > 6 && !keepers.contains(&0), "{keepers:?}");
+        assert_eq!(owner(a, GRID, 1, 0), 0, "one node keeps them all");
     }
 }
