@@ -716,7 +716,7 @@ fn coherence_key(pn: [f32; 6], grid: [f32; 4]) -> [i32; 4] {
     const TOP: i32 = 1 << 20;
     let cell = |j: usize| {
         let x = (pn[j] - grid[j]) / grid[3];
-        if !(x > 0.0) {
+        if x.is_nan() || x <= 0.0 {
             0
         } else if x >= TOP as f32 {
             TOP
