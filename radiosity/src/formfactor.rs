@@ -519,7 +519,8 @@ impl SourceDensity {
     /// radiosity (unshot power over area, channels summed): at each grid cell, the first part
     /// (in `parts` order) that contains the cell's centre ([`Tri::contains`]), or the nearest
     /// part for a centre beside every part. `None` with fewer than two parts, or as [`SourceDensity::new`]. The
-    /// solver and the `RAD.SOURCE.DENSITY` intrinsic both tabulate a shooting patch with this.
+    /// solver and the `RAD.SOURCE.DENSITY` and `RAD.SOURCE.DENSITIES` intrinsics tabulate a
+    /// shooting patch with this ([`SourceDensity::of_parts_sets`] for several densities).
     ///
     /// The cells are found part by part: a cell centre `src.sample(u, v)` has the barycentric
     /// coordinates `(1 - s, v s, (1 - v) s)` with `s = √u`, so a part covers the centres of the

@@ -471,7 +471,7 @@ fn capacities(
             node_patches(
                 mesh,
                 (rule, supports, corners_at),
-                coherence_grid(flat, settings),
+                coherence_grid(mesh, settings),
                 settings.nodes,
                 node_points,
                 node_corners,
@@ -668,15 +668,19 @@ pub const COHERENCE_CELLS: u32 = 8;
 
 /// The grid whose cells' sample points the controller deals to one node (carm-common.inc's
 /// `coherence.key`): its low corner and cell edge, [`COHERENCE_CELLS`] cells an axis over the
-/// octree's root box, when the voxels are spread, where a node's points that lie together need
-/// fewer voxels fetched; an edge of 0 (each point dealt by its own hash, spreading the work of
-/// every shot evenly) when every node holds every voxel.
-fn coherence_grid(flat: &FlatOctree, settings: &CarmSettings) -> [f32; 4] {
-    let depth = flat.tree.first().copied().unwrap_or(0).clamp(0, 30);
-    match (&settings.memory, &flat.frame[..]) {
-        (Some(_), &[x, y, z, cell]) => {
-            let root = cell * (1u32 << depth) as f32;
-            [x, y, z, root / COHERENCE_CELLS as f32]
+/// cube that bounds the sample points, when the voxels are spread, where a node's points that
+/// lie together need fewer voxels fetched; an edge of 0 (each point dealt by its own hash,
+/// spreading the work of every shot evenly) when every node holds every voxel. (Not the
+/// octree's root box: it bounds only the triangles that can hide something.)
+fn coherence_grid(mesh: &Mesh, settings: &CarmSettings) -> [f32; 4] {
+    let (lo, hi) = mesh.vertices.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), v| (lo.min(v.pos), hi.max(v.pos)),
+    );
+    let side = (hi - lo).max_element();
+    match &settings.memory {
+        Some(_) if side.is_finite() && side > 0.0 => {
+            [lo.x, lo.y, lo.z, side / COHERENCE_CELLS as f32]
         }
         _ => [0.0; 4],
     }
@@ -992,7 +996,7 @@ fn host_input(
         w.int(back.len() as i32);
         back.iter().for_each(|&x| w.real32(x));
     }
-    for x in coherence_grid(flat, settings) {
+    for x in coherence_grid(mesh, settings) {
         w.real32(x);
     }
     for (v, &c) in mesh.vertices.iter().zip(corners_at) {

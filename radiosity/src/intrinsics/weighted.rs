@@ -1,9 +1,10 @@
 //! Intrinsics for a source that shoots unevenly (issue 10, cause 4): a patch shoots what each of
 //! its elements holds, not its average, so its samples carry weights. `RAD.SOURCE.DENSITY`
-//! tabulates a patch from its elements' unshot radiosity, `RAD.SOURCE.SAMPLES.WEIGHTED.AT` draws
-//! the samples with their weights, and `RAD.FORM.FACTOR.WEIGHTED` weighs the visible ones, each
-//! exactly as the Rust solver does it ([`SourceDensity::of_parts`], [`source_samples_weighted`],
-//! [`form_factor_weighted`]). An empty density stands for a uniform source (no weights).
+//! tabulates a patch from its elements' unshot radiosity (`RAD.SOURCE.DENSITIES` several
+//! densities at once), `RAD.SOURCE.SAMPLES.WEIGHTED.AT` draws the samples with their weights,
+//! and `RAD.FORM.FACTOR.WEIGHTED` weighs the visible ones, each exactly as the Rust solver does
+//! it ([`SourceDensity::of_parts_sets`], [`source_samples_weighted`], [`form_factor_weighted`]).
+//! An empty density stands for a uniform source (no weights).
 
 use glam::Vec3;
 use occ_runtime::abi::Word;
