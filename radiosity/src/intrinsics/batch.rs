@@ -857,12 +857,14 @@ fn book_corners(
         let rho = [rho[at], rho[at + 1], rho[at + 2]].map(f64::from);
         for c in start..start + run.len() {
             let p = point[c] as usize;
+            // (at scale most points receive nothing from a shot: their corners' weights are
+            // not read)
+            let f = [0, 1, 2].map(|j| factor(p, j));
             // A corner of weight 0 only keeps power for its element (adaptive subdivision).
-            if weight[c] == 0.0 {
+            if f == [0.0; 3] || weight[c] == 0.0 {
                 continue;
             }
-            for j in 0..3 {
-                let f = factor(p, j);
+            for (j, &f) in f.iter().enumerate() {
                 if f == 0.0 {
                     continue;
                 }
