@@ -89,9 +89,14 @@ fn deadlock_across_ranks_is_reported_per_node() {
     assert_eq!(o.status.code(), Some(1));
 }
 
-/// `occ radiosity --solver carm` on 13 nodes (`--threads 1`) into `out`, in this process or
-/// spread over four MPI ranks; returns report.json's per-object mean B and rank 0's stderr.
-fn carm(mpi: bool, out: &std::path::Path) -> (Vec<serde_json::Value>, String) {
+/// `occ radiosity --solver carm` on 13 nodes (`--threads 1`) into `out`, with `extra` settings,
+/// in this process or spread over four MPI ranks; returns report.json's per-object mean B and
+/// rank 0's stderr, and the report.
+fn carm(
+    mpi: bool,
+    out: &std::path::Path,
+    extra: &[&str],
+) -> (Vec<serde_json::Value>, String, serde_json::Value) {
     let _ = std::fs::remove_dir_all(out);
     let occ = env!("CARGO_BIN_EXE_occ");
     let args = [
@@ -107,8 +112,6 @@ fn carm(mpi: bool, out: &std::path::Path) -> (Vec<serde_json::Value>, String) {
         "4",
         "--element-size",
         "150",
-        "--until",
-        "unshot=0.05",
         "--image-size",
         "16",
         "--out",
@@ -120,11 +123,12 @@ fn carm(mpi: bool, out: &std::path::Path) -> (Vec<serde_json::Value>, String) {
             .args(["--oversubscribe", "-np", RANKS, occ])
             .args(args)
             .arg(out)
+            .args(extra)
             .args(["--transport", "mpi"]);
         c
     } else {
         let mut c = Command::new(occ);
-        c.args(args).arg(out);
+        c.args(args).arg(out).args(extra);
         c
     };
     let o = cmd
@@ -146,16 +150,52 @@ fn carm(mpi: bool, out: &std::path::Path) -> (Vec<serde_json::Value>, String) {
         Some(13),
         "every node's counters reach rank 0"
     );
-    (means, err)
+    (means, err, report)
 }
 
 #[test]
 fn carm_across_four_ranks_gives_the_in_process_solution() {
     let tmp = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
-    let (here, _) = carm(false, &tmp.join("carm-inproc"));
-    let (there, err) = carm(true, &tmp.join("carm-mpi"));
+    let until = ["--until", "unshot=0.05"];
+    let (here, _, _) = carm(false, &tmp.join("carm-inproc"), &until);
+    let (there, err, _) = carm(true, &tmp.join("carm-mpi"), &until);
     // The same sums in the same order on every node: the same numbers, bit for bit.
     assert_eq!(there, here, "per-object means under mpirun");
     // Only rank 0 speaks: one "shooting" stage line, not one per rank.
     assert_eq!(err.matches("shooting").count(), 1, "{err}");
+}
+
+/// The geometry spread (the Cornell box in voxels of at most 8 triangles, all 32 of them, an
+/// eighth a node), so that voxels are fetched from nodes on other ranks and from the backing
+/// store at rank 0, and sample points dealt by their regions ("Coherent placement"): the
+/// in-process solution, bit for bit.
+#[test]
+fn carm_spread_across_four_ranks_gives_the_in_process_solution() {
+    let tmp = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
+    let spread = [
+        "--until",
+        "shots=20",
+        "--voxel-triangles",
+        "8",
+        "--all-stages",
+        "--node-memory",
+        "2094",
+        "--cache",
+        "1047",
+    ];
+    let (here, _, _) = carm(false, &tmp.join("carm-spread-inproc"), &spread);
+    let (there, _, report) = carm(true, &tmp.join("carm-spread-mpi"), &spread);
+    assert_eq!(there, here, "per-object means under mpirun");
+    let nodes = report["nodes"].as_array().expect("nodes");
+    let sum = |k: &str| nodes.iter().map(|n| n[k].as_u64().expect(k)).sum::<u64>();
+    assert!(
+        sum("cache_misses") > 0 && sum("store_reads") > 0,
+        "{report}"
+    );
+    for n in nodes {
+        assert!(
+            n["voxel_bytes_peak"].as_u64() <= n["voxel_budget"].as_u64(),
+            "{n}"
+        );
+    }
 }
