@@ -311,12 +311,17 @@ pub fn solve(
     // the points each element keeps corners at on the nodes, by the rule it books by
     let supports = Supports::new(&solver.mesh, solver.config().element_means);
     let corners_at = supports.at_vertices(solver.mesh.vertices.len());
+    // how the controller deals the points: the corners at each, and the coherence grid
+    let dealing = (
+        corners_at.as_slice(),
+        coherence_grid(&solver.mesh, settings),
+    );
     let (input, store, sources) = if host_here {
-        host_input(solver, &flat, &items, settings, &corners_at)?
+        host_input(solver, &flat, &items, settings, dealing)?
     } else {
         (Vec::new(), None, None)
     };
-    let capacities = capacities(solver, &flat, &items, settings, &supports, &corners_at)?;
+    let capacities = capacities(solver, &flat, &items, settings, &supports, dealing)?;
     let shares = store.as_ref().map(|s| s.shares.clone());
     let reads = store.as_ref().map(|s| s.reads.clone());
     let answers = Pipe::default();
@@ -408,14 +413,15 @@ pub fn solve(
 /// element corners times the load tolerance (with room for one more point's corners), beyond
 /// which the controller re-hashes a point to another node, the most patches a node has corners
 /// of (`node_patches`), and the worker tasks and threads a node runs. `supports` lists the points
-/// each element keeps corners at, `corners_at` how many each point keeps.
+/// each element keeps corners at, `corners_at` how many each point keeps, `grid` the coherence
+/// grid the controller deals them by (`coherence_grid`).
 fn capacities(
     solver: &Solver,
     flat: &FlatOctree,
     items: &Items,
     settings: &CarmSettings,
     supports: &Supports,
-    corners_at: &[usize],
+    (corners_at, grid): (&[usize], [f32; 4]),
 ) -> anyhow::Result<Vec<(&'static str, usize)>> {
     anyhow::ensure!(
         (1..=MOST_WALKERS).contains(&settings.tasks)
@@ -471,7 +477,7 @@ fn capacities(
             node_patches(
                 mesh,
                 (rule, supports, corners_at),
-                coherence_grid(mesh, settings),
+                grid,
                 settings.nodes,
                 node_points,
                 node_corners,
@@ -661,7 +667,8 @@ fn deal(
     Some(dealt)
 }
 
-/// Cells an axis of the coherence grid over the octree's root box (`coherence_grid`).
+/// Cells an axis of the coherence grid over the cube bounding the sample points
+/// (`coherence_grid`).
 /// Measured on the generated rooms spread over 13 nodes (programs/README.md, "Coherent
 /// placement"): 8 fetched the fewest voxels of 4, 8, 16, 32 and 64.
 pub const COHERENCE_CELLS: u32 = 8;
@@ -851,7 +858,7 @@ fn host_input(
     flat: &FlatOctree,
     items: &Items,
     settings: &CarmSettings,
-    corners_at: &[usize],
+    (corners_at, grid): (&[usize], [f32; 4]),
 ) -> anyhow::Result<(Vec<u8>, Option<Store>, Option<Sources>)> {
     let config = solver.config();
     let (scene, mesh) = (solver.scene, &solver.mesh);
@@ -996,7 +1003,7 @@ fn host_input(
         w.int(back.len() as i32);
         back.iter().for_each(|&x| w.real32(x));
     }
-    for x in coherence_grid(mesh, settings) {
+    for x in grid {
         w.real32(x);
     }
     for (v, &c) in mesh.vertices.iter().zip(corners_at) {
